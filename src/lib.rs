@@ -1,0 +1,2 @@
+//! hyrt: a hybrid CPU renderer.
+pub mod scene;

@@ -1,0 +1,344 @@
+//! The scene model: flat triangles with materials, point lights, a pinhole camera and settings.
+//!
+//! Every loader (built-in, OBJ, glTF, TOML scene file) produces a [`Scene`]; everything after
+//! loading (planner, pipelines, inspector) reads only this model. [`Scene::validate`] is the one
+//! place where bad geometry (NaN or infinite vertices, empty scenes) and degenerate cameras are
+//! turned into errors, so a renderer never sees them.
+
+pub mod builtin;
+pub mod file;
+pub mod gltf;
+pub mod obj;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, bail};
+use glam::{Mat4, Vec3};
+
+/// A diffuse + perfect-specular (Whitted) material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse reflectance (albedo) per RGB channel, in [0, 1].
+    pub kd: Vec3,
+    /// Mirror reflectance per channel: the weight of the Whitted reflection ray.
+    pub ks: Vec3,
+}
+
+impl Material {
+    pub fn diffuse(name: &str, kd: Vec3) -> Self {
+        Self { name: name.to_string(), kd, ks: Vec3::ZERO }
+    }
+
+    /// An MTL-style material: `illum 3` or `Ks >= 0.99` makes a perfect mirror (no diffuse
+    /// term, `Ks` as reflectance); otherwise `Ks > 0` is a partial mirror weight beside `Kd`.
+    pub fn from_mtl(name: &str, kd: Vec3, ks: Vec3, illum: Option<u8>) -> Self {
+        let perfect = illum == Some(3) || ks.max_element() >= 0.99;
+        let kd = if perfect { Vec3::ZERO } else { kd };
+        Self { name: name.to_string(), kd, ks }
+    }
+
+    /// True when this material spawns reflection rays.
+    pub fn is_specular(&self) -> bool {
+        self.ks.max_element() > 0.0
+    }
+}
+
+/// An isotropic point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    pub position: Vec3,
+    /// Radiant intensity in W/sr per RGB channel.
+    pub intensity: Vec3,
+}
+
+/// A pinhole camera. The field of view is vertical; `fov_x_deg`, when given (as the Radiance
+/// office view does), fixes the horizontal extent too, otherwise it follows the image aspect.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    /// Viewing direction (need not be normalised).
+    pub forward: Vec3,
+    pub up: Vec3,
+    pub fov_y_deg: f32,
+    pub fov_x_deg: Option<f32>,
+}
+
+impl Camera {
+    pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, fov_y_deg: f32) -> Self {
+        Self { eye, forward: target - eye, up, fov_y_deg, fov_x_deg: None }
+    }
+}
+
+/// Render settings that travel with a scene (the CLI may override them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    /// Maximum number of mirror bounces after the camera hit.
+    pub max_depth: u32,
+    /// Linear scale applied before the sRGB transform when writing PNG.
+    pub exposure: f32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self { width: 640, height: 480, max_depth: 5, exposure: 1.0 }
+    }
+}
+
+/// A named range of triangles, as loaded from one mesh or object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshRange {
+    pub name: String,
+    pub first: u32,
+    pub count: u32,
+}
+
+/// Everything a renderer needs.
+///
+/// Triangles are flattened: triangle `i` has corners `positions[i]`, per-corner shading normals
+/// `normals[i]` (the face normal three times when the source gave none) and material
+/// `material[i]`. The index `i` is the triangle's original id: load order, stable across runs;
+/// acceleration structures reorder internally but report this id.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub name: String,
+    pub positions: Vec<[Vec3; 3]>,
+    pub normals: Vec<[Vec3; 3]>,
+    pub material: Vec<u32>,
+    pub materials: Vec<Material>,
+    pub meshes: Vec<MeshRange>,
+    pub lights: Vec<PointLight>,
+    pub camera: Option<Camera>,
+    pub settings: Settings,
+    /// Where the scene came from (for messages); `None` for built-in scenes.
+    pub source: Option<PathBuf>,
+}
+
+/// Geometry as a loader produces it, before it is placed in a scene.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    pub positions: Vec<[Vec3; 3]>,
+    /// Per-corner normals; `None` where the source had none for that triangle.
+    pub normals: Vec<Option<[Vec3; 3]>>,
+    /// Index into `materials`.
+    pub material: Vec<u32>,
+    pub materials: Vec<Material>,
+    pub ranges: Vec<MeshRange>,
+}
+
+impl MeshData {
+    /// Applies an affine transform (normals by the inverse transpose).
+    pub fn transform(&mut self, m: Mat4) {
+        let n = m.inverse().transpose();
+        for t in &mut self.positions {
+            for p in t.iter_mut() {
+                *p = m.transform_point3(*p);
+            }
+        }
+        for t in self.normals.iter_mut().flatten() {
+            for v in t.iter_mut() {
+                *v = n.transform_vector3(*v).normalize_or_zero();
+            }
+        }
+    }
+}
+
+impl Scene {
+    /// An empty scene with a name.
+    pub fn new(name: &str) -> Self {
+        Self { name: name.to_string(), ..Default::default() }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Adds a material and returns its id.
+    pub fn add_material(&mut self, m: Material) -> u32 {
+        self.materials.push(m);
+        (self.materials.len() - 1) as u32
+    }
+
+    /// Appends loaded geometry; its material ids are remapped after this scene's own.
+    pub fn add_mesh(&mut self, mesh: MeshData) {
+        let mat_base = self.materials.len() as u32;
+        let tri_base = self.positions.len() as u32;
+        self.materials.extend(mesh.materials);
+        for (i, t) in mesh.positions.iter().enumerate() {
+            let n = mesh.normals.get(i).copied().flatten();
+            self.push_triangle(*t, n, mat_base + mesh.material[i]);
+        }
+        for r in mesh.ranges {
+            self.meshes.push(MeshRange { first: r.first + tri_base, ..r });
+        }
+    }
+
+    /// Appends one triangle; without corner normals, the geometric normal is used.
+    pub fn push_triangle(&mut self, p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) {
+        let n = n.unwrap_or_else(|| {
+            let g = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+            [g; 3]
+        });
+        self.positions.push(p);
+        self.normals.push(n);
+        self.material.push(material);
+    }
+
+    /// Appends a quad `a b c d` (counter-clockwise) as two triangles.
+    pub fn push_quad(&mut self, q: [Vec3; 4], material: u32) {
+        self.push_triangle([q[0], q[1], q[2]], None, material);
+        self.push_triangle([q[0], q[2], q[3]], None, material);
+    }
+
+    /// Axis-aligned bounds of all triangles, `None` for an empty scene.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut it = self.positions.iter().flatten();
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+
+    /// A short human name for messages: the source path or the scene name.
+    pub fn origin(&self) -> String {
+        match &self.source {
+            Some(p) => p.display().to_string(),
+            None => format!("built-in scene '{}'", self.name),
+        }
+    }
+
+    /// Frames the scene with an automatic camera and one light when it has none (used for
+    /// bare mesh files): the camera looks at the bounds' centre from the front (+Z) and
+    /// slightly above, the light sits at the camera, bright enough for an irradiance of
+    /// about pi at the centre (a white diffuse surface facing it shows radiance ~1).
+    pub fn frame_automatically(&mut self) {
+        let Some((lo, hi)) = self.bounds() else { return };
+        let centre = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(f32::MIN_POSITIVE.sqrt());
+        let fov_y = 45.0f32;
+        // Distance at which a sphere of this radius fits the vertical field of view.
+        let dist = radius / (fov_y.to_radians() * 0.5).sin();
+        let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
+        let eye = centre + dir * dist;
+        if self.camera.is_none() {
+            self.camera = Some(Camera::look_at(eye, centre, Vec3::Y, fov_y));
+        }
+        if self.lights.is_empty() {
+            let pos = eye + Vec3::Y * radius * 0.5;
+            let d2 = (pos - centre).length_squared();
+            self.lights.push(PointLight {
+                position: pos,
+                intensity: Vec3::splat(std::f32::consts::PI * d2),
+            });
+        }
+    }
+
+    /// Checks everything a renderer relies on; the error names the scene's origin.
+    pub fn validate(&self) -> Result<()> {
+        let origin = self.origin();
+        if self.positions.is_empty() {
+            bail!("{origin}: the scene has no triangles");
+        }
+        if let Some((i, _)) = self
+            .positions
+            .iter()
+            .enumerate()
+            .find(|(_, t)| !t.iter().all(|p| p.is_finite()))
+        {
+            let mesh = self.mesh_of(i as u32).map(|m| format!(" (mesh '{}')", m.name)).unwrap_or_default();
+            bail!("{origin}: triangle {i}{mesh} has a NaN or infinite vertex coordinate");
+        }
+        if let Some((i, _)) = self.normals.iter().enumerate().find(|(_, t)| !t.iter().all(|n| n.is_finite())) {
+            bail!("{origin}: triangle {i} has a NaN or infinite normal");
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if !l.position.is_finite() || !l.intensity.is_finite() || l.intensity.min_element() < 0.0 {
+                bail!("{origin}: light {i} has a non-finite position or a negative/non-finite intensity");
+            }
+        }
+        for m in &self.materials {
+            if !m.kd.is_finite() || !m.ks.is_finite() {
+                bail!("{origin}: material '{}' has a non-finite colour", m.name);
+            }
+        }
+        let s = &self.settings;
+        if s.width == 0 || s.height == 0 {
+            bail!("{origin}: image size {}x{} is empty", s.width, s.height);
+        }
+        if !(s.exposure.is_finite() && s.exposure > 0.0) {
+            bail!("{origin}: exposure must be a positive number, got {}", s.exposure);
+        }
+        let Some(cam) = &self.camera else { bail!("{origin}: the scene has no camera") };
+        validate_camera(cam).map_err(|e| anyhow::anyhow!("{origin}: degenerate camera: {e}"))?;
+        Ok(())
+    }
+
+    /// The mesh range containing triangle `tri`.
+    pub fn mesh_of(&self, tri: u32) -> Option<&MeshRange> {
+        self.meshes.iter().find(|m| tri >= m.first && tri < m.first + m.count)
+    }
+
+    /// Path of the scene file's directory, for resolving relative mesh paths.
+    pub fn base_dir(&self) -> Option<&Path> {
+        self.source.as_deref().and_then(Path::parent)
+    }
+}
+
+fn validate_camera(c: &Camera) -> std::result::Result<(), String> {
+    if !(c.eye.is_finite() && c.forward.is_finite() && c.up.is_finite()) {
+        return Err("non-finite eye, direction or up".into());
+    }
+    if c.forward.length_squared() <= f32::MIN_POSITIVE {
+        return Err("eye and target coincide (no viewing direction)".into());
+    }
+    if c.forward.normalize().cross(c.up.normalize_or_zero()).length_squared() < 1e-10 {
+        return Err("up vector is zero or parallel to the viewing direction".into());
+    }
+    let ok = |f: f32| f.is_finite() && f > 0.0 && f < 180.0;
+    if !ok(c.fov_y_deg) || !c.fov_x_deg.is_none_or(ok) {
+        return Err("field of view must be in (0, 180) degrees".into());
+    }
+    Ok(())
+}
+
+/// Loads geometry from a mesh file, choosing the loader by extension
+/// (`.obj`, `.obj.gz`, `.gltf`, `.glb`).
+pub fn load_mesh(path: &Path) -> Result<MeshData> {
+    let name = path.file_name().map(|n| n.to_string_lossy().to_lowercase()).unwrap_or_default();
+    if name.ends_with(".obj") || name.ends_with(".obj.gz") {
+        obj::load(path)
+    } else if name.ends_with(".gltf") || name.ends_with(".glb") {
+        gltf::load(path)
+    } else {
+        bail!("{}: unknown mesh format (expected .obj, .obj.gz, .gltf or .glb)", path.display())
+    }
+}
+
+/// Resolves what the CLI was given: a built-in scene name, a `.toml` scene file, or a bare mesh
+/// file (which gets an automatic camera and light). The result is validated.
+pub fn load(spec: &str) -> Result<Scene> {
+    let scene = if let Some(s) = builtin::by_name(spec) {
+        s
+    } else {
+        let path = Path::new(spec);
+        let lower = spec.to_lowercase();
+        if lower.ends_with(".toml") {
+            file::load(path)?
+        } else if ["obj", "obj.gz", "gltf", "glb"].iter().any(|e| lower.ends_with(&format!(".{e}"))) {
+            let mut scene = Scene::new(
+                &path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+            );
+            scene.source = Some(path.to_path_buf());
+            scene.add_mesh(load_mesh(path)?);
+            scene.frame_automatically();
+            scene
+        } else {
+            bail!(
+                "unknown scene '{spec}': not a built-in scene ({}) nor a .toml, .obj, .obj.gz, .gltf or .glb file",
+                builtin::NAMES.join(", ")
+            );
+        }
+    };
+    scene.validate()?;
+    Ok(scene)
+}

@@ -1,1 +1,196 @@
-pub fn placeholder() {}
+//! hyrt-tracer: ray casting against triangles with an obvhs CWBVH.
+//!
+//! Plain slices in, plain structs out: the tracer knows nothing of scenes, materials or files.
+//! It gives closest hits and occlusion tests that are
+//! - **watertight** ([`triangle`]: Woop, Benthin and Wald 2013, with pbrt-v4's conservative
+//!   `t > 0` bound), so rays through shared edges and vertices never slip between triangles;
+//! - **deterministic**: ties at exactly equal distance go to the smaller original triangle id,
+//!   whatever order the BVH visits them in;
+//! - **free of self-intersection without magic epsilons**: hit points carry a rounding-error
+//!   bound and new rays start from an origin offset just past it ([`offset`]);
+//! - **counted** by kind ([`RayCounts`]), per caller, so parallel passes reduce in a fixed order.
+
+pub mod counts;
+pub mod offset;
+pub mod triangle;
+
+use std::time::Duration;
+
+use glam::{Vec3, Vec3A};
+use obvhs::{
+    BvhBuildParams,
+    cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
+    ray::{Ray as ObRay, RayHit},
+    triangle::Triangle,
+};
+
+pub use counts::{RayCounts, RayKind};
+pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
+pub use triangle::{RayPrecomp, TriHit, intersect_triangle};
+
+/// A ray with a normalised direction; hits are accepted for `0 < t < tmax`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3, tmax: f32) -> Self {
+        Self { origin, dir, tmax }
+    }
+}
+
+/// A closest hit: distance, original triangle id and barycentrics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    /// The triangle's index in the slice given to [`Tracer::build`].
+    pub tri: u32,
+    /// Barycentric weights of corners 0, 1, 2 (sum to 1).
+    pub bary: [f32; 3],
+}
+
+/// A BVH over triangles, built once per scene.
+pub struct Tracer {
+    bvh: CwBvh,
+    /// Triangles in BVH leaf order, in the tracer's scaled frame.
+    tris: Vec<[Vec3A; 3]>,
+    /// Original id of each triangle in `tris`.
+    ids: Vec<u32>,
+    /// Original triangles (unscaled), for occluder-hint tests by original id.
+    original: Vec<[Vec3; 3]>,
+    /// Power of two applied to all coordinates (see [`Tracer::build`]).
+    scale: f32,
+    build_time: Duration,
+}
+
+impl Tracer {
+    /// Builds the BVH (obvhs `medium_build`, no spatial splits, so each triangle sits in
+    /// exactly one leaf; the `parallel` feature is off, which the project pins so the tree is
+    /// the same on every machine).
+    ///
+    /// Triangles with a non-finite coordinate are left out (they can never be hit).
+    ///
+    /// **Scale.** obvhs culls BVH nodes whose exit distance is below an absolute `1e-4`
+    /// (`cwbvh::node::EPSILON`), which would lose contact hits in a scene measured in metres
+    /// and every hit in a scene a millimetre wide. We therefore multiply all coordinates by a
+    /// power of two `s` chosen so that the largest coordinate magnitude lies in
+    /// `[2^19, 2^20)`. Multiplying by a power of two is exact in floating point (barring
+    /// overflow and subnormals, which this range avoids), so hits are unchanged; distances
+    /// come back divided by the same `s`, again exactly. At that magnitude one ulp of a
+    /// coordinate is at least `2^19 * 2^-23 = 1/16`, so the culling distance `1e-4` is far
+    /// below anything that floating-point coordinates can distinguish.
+    pub fn build(tris: &[[Vec3; 3]]) -> Self {
+        let start = std::time::Instant::now();
+        let max_abs = tris
+            .iter()
+            .flatten()
+            .filter(|p| p.is_finite())
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        let scale = if max_abs > 0.0 {
+            let e = max_abs.log2().floor() as i32;
+            2f32.powi((19 - e).clamp(-120, 120))
+        } else {
+            1.0
+        };
+        let mut kept = Vec::with_capacity(tris.len());
+        let mut kept_ids = Vec::with_capacity(tris.len());
+        for (i, t) in tris.iter().enumerate() {
+            if t.iter().all(|p| p.is_finite()) {
+                kept.push(Triangle {
+                    v0: Vec3A::from(t[0] * scale),
+                    v1: Vec3A::from(t[1] * scale),
+                    v2: Vec3A::from(t[2] * scale),
+                });
+                kept_ids.push(i as u32);
+            }
+        }
+        let bvh = if kept.is_empty() {
+            CwBvh::default()
+        } else {
+            build_cwbvh_from_tris(&kept, BvhBuildParams::medium_build(), &mut Duration::default())
+        };
+        let (bvh_tris, ids) = bvh
+            .primitive_indices
+            .iter()
+            .map(|&k| {
+                let t = &kept[k as usize];
+                ([t.v0, t.v1, t.v2], kept_ids[k as usize])
+            })
+            .unzip();
+        Self { bvh, tris: bvh_tris, ids, original: tris.to_vec(), scale, build_time: start.elapsed() }
+    }
+
+    /// Wall time of [`Tracer::build`].
+    pub fn build_time(&self) -> Duration {
+        self.build_time
+    }
+
+    /// Number of triangles given to [`Tracer::build`].
+    pub fn triangle_count(&self) -> usize {
+        self.original.len()
+    }
+
+    /// The internal power-of-two scale (exposed for tests).
+    pub fn internal_scale(&self) -> f32 {
+        self.scale
+    }
+
+    fn scaled(&self, ray: &Ray) -> (ObRay, RayPrecomp) {
+        let o = Vec3A::from(ray.origin * self.scale);
+        let d = Vec3A::from(ray.dir);
+        let tmax = ray.tmax * self.scale;
+        (ObRay::new(o, d, 0.0, tmax), RayPrecomp::new(o, d))
+    }
+
+    /// The nearest hit with `0 < t < ray.tmax`; ties go to the smaller triangle id.
+    pub fn closest_hit(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> Option<Hit> {
+        counts.add(kind, 1);
+        if self.bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+            return None;
+        }
+        let (ob, pre) = self.scaled(ray);
+        let mut best: Option<(f32, u32, [f32; 3])> = None;
+        self.bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
+            let Some(h) = intersect_triangle(&pre, &self.tris[i], r.tmax) else {
+                return f32::INFINITY;
+            };
+            let id = self.ids[i];
+            let better = match best {
+                None => true,
+                Some((bt, bid, _)) => h.t < bt || (h.t == bt && id < bid),
+            };
+            if better {
+                best = Some((h.t, id, h.bary));
+            }
+            // obvhs shrinks tmax to the value returned and stops visiting nodes beyond it.
+            // Returning the next float above the best t keeps nodes that touch exactly that
+            // distance alive, so an equally distant triangle with a smaller id is still seen.
+            best.map_or(f32::INFINITY, |(bt, _, _)| bt.next_up())
+        });
+        best.map(|(t, tri, bary)| Hit { t: t / self.scale, tri, bary })
+    }
+
+    /// True when anything is hit with `0 < t < ray.tmax`.
+    pub fn occluded(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> bool {
+        counts.add(kind, 1);
+        if self.bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+            return false;
+        }
+        let (ob, pre) = self.scaled(ray);
+        !self.bvh.ray_traverse_miss(ob, |r, i| {
+            intersect_triangle(&pre, &self.tris[i], r.tmax).map_or(f32::INFINITY, |h| h.t)
+        })
+    }
+
+    /// Tests a single triangle by original id (the occluder hint of a shadow map texel):
+    /// no traversal. Not counted as a ray; callers count hint tests themselves.
+    pub fn hits_triangle(&self, tri: u32, ray: &Ray) -> Option<Hit> {
+        let t = self.original.get(tri as usize)?;
+        let (ob, pre) = self.scaled(ray);
+        let v = [Vec3A::from(t[0] * self.scale), Vec3A::from(t[1] * self.scale), Vec3A::from(t[2] * self.scale)];
+        intersect_triangle(&pre, &v, ob.tmax).map(|h| Hit { t: h.t / self.scale, tri, bary: h.bary })
+    }
+}

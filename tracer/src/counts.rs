@@ -1,0 +1,64 @@
+//! Ray counters by kind.
+//!
+//! Counts are plain integers owned by one piece of work (a tile, a row); a parallel pass gives
+//! each chunk its own [`RayCounts`] and adds them up afterwards. Integer addition is
+//! associative, so the totals are the same for any thread count, and no atomic traffic sits
+//! on the hot path.
+
+use std::ops::AddAssign;
+
+/// The kinds of rays the renderers cast.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    /// Camera rays.
+    Primary,
+    /// Point-light visibility rays (from camera and mirror hits).
+    Shadow,
+    /// Mirror reflection rays.
+    Specular,
+    /// Visibility rays towards virtual point lights.
+    VplShadow,
+}
+
+/// Number of rays cast, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    pub primary: u64,
+    pub shadow: u64,
+    pub specular: u64,
+    pub vpl_shadow: u64,
+}
+
+impl RayCounts {
+    #[inline]
+    pub fn add(&mut self, kind: RayKind, n: u64) {
+        match kind {
+            RayKind::Primary => self.primary += n,
+            RayKind::Shadow => self.shadow += n,
+            RayKind::Specular => self.specular += n,
+            RayKind::VplShadow => self.vpl_shadow += n,
+        }
+    }
+
+    pub fn total(&self) -> u64 {
+        self.primary + self.shadow + self.specular + self.vpl_shadow
+    }
+}
+
+impl AddAssign for RayCounts {
+    fn add_assign(&mut self, o: Self) {
+        self.primary += o.primary;
+        self.shadow += o.shadow;
+        self.specular += o.specular;
+        self.vpl_shadow += o.vpl_shadow;
+    }
+}
+
+impl std::iter::Sum for RayCounts {
+    fn sum<I: Iterator<Item = Self>>(iter: I) -> Self {
+        iter.fold(Self::default(), |mut a, b| {
+            a += b;
+            a
+        })
+    }
+}

@@ -1,0 +1,124 @@
+//! Watertight ray-triangle intersection.
+//!
+//! Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013), in the form of
+//! pbrt-v4's `Triangle::Intersect`: translate the vertices to the ray origin, permute axes so
+//! the ray's largest direction component is `z`, shear so the ray becomes the `+z` axis, then
+//! the 2D edge functions of the sheared vertices at the origin decide the hit. An edge shared by
+//! two triangles gives exactly negated edge values in both (`a*b - c*d` rounds symmetrically),
+//! so a ray through it hits at least one of them: no cracks. Exact zeros are re-evaluated in
+//! f64, where the products of two f32 values are exact.
+
+use glam::Vec3A;
+
+/// `gamma(n) = n u / (1 - n u)`, u the unit roundoff of f32 (Higham; pbrt-v4 section 6.8):
+/// a bound on the relative error of `n` chained floating-point operations.
+#[inline]
+pub fn gamma(n: i32) -> f32 {
+    let u = f32::EPSILON * 0.5;
+    (n as f32 * u) / (1.0 - n as f32 * u)
+}
+
+/// Per-ray values shared by every triangle test of one traversal.
+#[derive(Clone, Copy, Debug)]
+pub struct RayPrecomp {
+    origin: Vec3A,
+    /// Axis permutation: `kz` is the largest |direction| component.
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    /// Shear coefficients `(-dx/dz, -dy/dz, 1/dz)` in the permuted frame.
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl RayPrecomp {
+    pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let kx = (kz + 1) % 3;
+        let ky = (kx + 1) % 3;
+        let d = dir.to_array();
+        Self { origin, kx, ky, kz, sx: -d[kx] / d[kz], sy: -d[ky] / d[kz], sz: 1.0 / d[kz] }
+    }
+}
+
+/// A hit in the ray's parameter `t` with barycentric weights of corners 0, 1, 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriHit {
+    pub t: f32,
+    pub bary: [f32; 3],
+}
+
+/// Intersects one triangle; returns hits with `0 < t < tmax` only.
+///
+/// Degenerate triangles (zero area, including collinear and coincident vertices) are never hit:
+/// the determinant, the sum of the three edge values, is zero for them.
+#[inline]
+pub fn intersect_triangle(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<TriHit> {
+    // Translate to the ray origin and permute.
+    let p = |q: Vec3A| {
+        let a = (q - r.origin).to_array();
+        [a[r.kx], a[r.ky], a[r.kz]]
+    };
+    let (mut p0, mut p1, mut p2) = (p(v[0]), p(v[1]), p(v[2]));
+    // Shear x and y so the ray runs along +z; z is scaled later, only if needed.
+    for q in [&mut p0, &mut p1, &mut p2] {
+        q[0] += r.sx * q[2];
+        q[1] += r.sy * q[2];
+    }
+    // Edge functions: twice the signed area of (origin, edge) in the sheared xy plane.
+    let mut e0 = p1[0] * p2[1] - p1[1] * p2[0];
+    let mut e1 = p2[0] * p0[1] - p2[1] * p0[0];
+    let mut e2 = p0[0] * p1[1] - p0[1] * p1[0];
+    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        // On an edge within f32 rounding: decide exactly (f32 * f32 is exact in f64).
+        let d = |a: f32, b: f32, c: f32, e: f32| (a as f64 * b as f64 - c as f64 * e as f64) as f32;
+        e0 = d(p1[0], p2[1], p1[1], p2[0]);
+        e1 = d(p2[0], p0[1], p2[1], p0[0]);
+        e2 = d(p0[0], p1[1], p0[1], p1[0]);
+    }
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    // Scaled hit distance: t * det, compared against the range without dividing.
+    let (z0, z1, z2) = (p0[2] * r.sz, p1[2] * r.sz, p2[2] * r.sz);
+    let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+    if det < 0.0 && (t_scaled >= 0.0 || t_scaled < tmax * det) {
+        return None;
+    }
+    if det > 0.0 && (t_scaled <= 0.0 || t_scaled > tmax * det) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if t >= tmax {
+        return None;
+    }
+    // Conservative check that t > 0 despite rounding (pbrt-v4, section 6.8.7): bound the error
+    // of the sheared coordinates, the edge values and t_scaled, and reject t within the bound.
+    let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
+    let delta_z = gamma(3) * max_zt;
+    let max_xt = p0[0].abs().max(p1[0].abs()).max(p2[0].abs());
+    let max_yt = p0[1].abs().max(p1[1].abs()).max(p2[1].abs());
+    let delta_x = gamma(5) * (max_xt + max_zt);
+    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let delta_t =
+        3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+    if t <= delta_t {
+        return None;
+    }
+    Some(TriHit { t, bary: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}

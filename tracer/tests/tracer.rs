@@ -1,0 +1,190 @@
+//! Tracer correctness: watertightness, tie-breaking, self-intersection, scale, bad input.
+
+use glam::{Vec3, vec3};
+use hyrt_tracer::{Ray, RayCounts, RayKind, Tracer, offset::hit_point, spawn_ray, spawn_ray_to};
+
+/// An n x n grid of quads in the plane z = 0 over [0, n]^2, two triangles each.
+fn grid(n: usize) -> Vec<[Vec3; 3]> {
+    let mut t = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (i as f32, j as f32);
+            let a = vec3(x, y, 0.0);
+            let b = vec3(x + 1.0, y, 0.0);
+            let c = vec3(x + 1.0, y + 1.0, 0.0);
+            let d = vec3(x, y + 1.0, 0.0);
+            t.push([a, b, c]);
+            t.push([a, c, d]);
+        }
+    }
+    t
+}
+
+#[test]
+fn rays_through_shared_edges_and_vertices_never_miss() {
+    let tris = grid(8);
+    let tracer = Tracer::build(&tris);
+    let mut counts = RayCounts::default();
+    let mut misses = 0;
+    let mut total = 0;
+    // Points on every grid line (shared edges), every vertex, and every diagonal, from
+    // oblique directions so the edges are not axis-aligned in the ray's frame.
+    // Interior points only: the outer boundary is not a shared edge.
+    for k in 1..64 {
+        for l in 1..8 {
+            let s = k as f32 / 8.0;
+            let l = l as f32;
+            for target in [vec3(s, l, 0.0), vec3(l, s, 0.0), vec3(s, s, 0.0)] {
+                for dir in [vec3(0.3, 0.7, -1.0), vec3(-0.11, 0.05, -1.0), vec3(0.0, 0.0, -1.0)] {
+                    let dir = dir.normalize();
+                    let ray = Ray::new(target - dir * 10.0, dir, f32::INFINITY);
+                    total += 1;
+                    if tracer.closest_hit(&ray, RayKind::Primary, &mut counts).is_none() {
+                        misses += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(misses, 0, "{misses} of {total} rays slipped through shared edges");
+    assert_eq!(counts.primary, total);
+}
+
+#[test]
+fn ties_at_equal_distance_go_to_the_smaller_id() {
+    let a = [vec3(-1.0, -1.0, 0.0), vec3(1.0, -1.0, 0.0), vec3(0.0, 1.0, 0.0)];
+    let b = [vec3(-2.0, -1.0, 0.0), vec3(2.0, -1.0, 0.0), vec3(0.0, 2.0, 0.0)];
+    let mut counts = RayCounts::default();
+    let ray = Ray::new(vec3(0.1, 0.0, 5.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
+    // Many copies so the two coplanar triangles land in different leaves and orders.
+    for order in [vec![a, b], vec![b, a]] {
+        let mut tris = order.clone();
+        tris.extend(grid(6).into_iter().map(|t| t.map(|p| p + vec3(20.0, 0.0, 0.0))));
+        let hit = Tracer::build(&tris).closest_hit(&ray, RayKind::Primary, &mut counts).unwrap();
+        assert_eq!(hit.tri, 0, "tie must go to triangle id 0");
+    }
+}
+
+#[test]
+fn reported_distance_and_barycentrics_match_the_geometry() {
+    let tri = [vec3(0.0, 0.0, -3.0), vec3(2.0, 0.0, -3.0), vec3(0.0, 2.0, -3.0)];
+    let tracer = Tracer::build(&[tri]);
+    let ray = Ray::new(vec3(0.5, 0.25, 1.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
+    let h = tracer.closest_hit(&ray, RayKind::Primary, &mut RayCounts::default()).unwrap();
+    assert!((h.t - 4.0).abs() <= 4.0 * 1e-6, "t = {}", h.t);
+    let (p, _) = hit_point(&tri, h.bary);
+    assert!((p - vec3(0.5, 0.25, -3.0)).length() < 1e-6, "p = {p}");
+    // tmax excludes hits at or beyond it.
+    let short = Ray { tmax: 3.9, ..ray };
+    assert!(!tracer.occluded(&short, RayKind::Shadow, &mut RayCounts::default()));
+    assert!(tracer.occluded(&Ray { tmax: 4.1, ..ray }, RayKind::Shadow, &mut RayCounts::default()));
+}
+
+/// Rays leaving a surface (reflection and shadow rays at grazing angles) must not hit the
+/// surface they leave, at any scale: zero self-hits over many points.
+#[test]
+fn spawned_rays_never_hit_their_own_surface_at_any_scale() {
+    for scale in [1e-4f32, 1e-2, 1.0, 1e2, 1e4] {
+        // A tilted, finely tessellated plane far from the origin (large coordinates are
+        // where fixed epsilons fail).
+        let base = grid(16);
+        let offset = vec3(3.0e3, -2.0e3, 1.0e3) * scale;
+        let rot = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.2, 0.1);
+        let tris: Vec<[Vec3; 3]> = base.iter().map(|t| t.map(|p| rot * (p * scale) + offset)).collect();
+        let tracer = Tracer::build(&tris);
+        let n = rot * Vec3::Z;
+        let mut counts = RayCounts::default();
+        let mut self_hits = 0;
+        for (i, tri) in tris.iter().enumerate().step_by(3) {
+            for b in [[0.2f32, 0.3, 0.5], [0.9, 0.05, 0.05], [1.0 / 3.0; 3]] {
+                let (p, err) = hit_point(tri, b);
+                for d in [n + rot * vec3(50.0, 0.0, 0.0), n + rot * vec3(-7.0, 3.0, 0.0), n] {
+                    let d = d.normalize();
+                    let r = spawn_ray(p, err, n, d);
+                    if tracer.occluded(&r, RayKind::Specular, &mut counts) {
+                        self_hits += 1;
+                    }
+                    // The same from the back side.
+                    let r = spawn_ray(p, err, n, -d);
+                    if tracer.occluded(&r, RayKind::Specular, &mut counts) {
+                        self_hits += 1;
+                    }
+                }
+                // A shadow ray to a light at grazing elevation.
+                let light = p + (rot * vec3(1.0, 0.0, 0.0) * 100.0 + n * 0.5) * scale;
+                if tracer.occluded(&spawn_ray_to(p, err, n, light), RayKind::Shadow, &mut counts) {
+                    self_hits += 1;
+                }
+            }
+            let _ = i;
+        }
+        assert_eq!(self_hits, 0, "scale {scale}: {self_hits} self-intersections");
+    }
+}
+
+/// Two parallel plates a tiny distance apart (relative 1e-5 of the coordinates): a ray from the
+/// lower plate towards the upper must hit it, at every scale; obvhs's absolute node epsilon
+/// would lose it without the tracer's internal rescaling.
+#[test]
+fn close_parallel_plates_are_resolved_at_every_scale() {
+    for scale in [1e-6f32, 1e-3, 1.0, 1e3, 1e6] {
+        let lower = [vec3(0.0, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0)].map(|p| p * scale);
+        let gap = 1e-5;
+        let upper = [vec3(0.0, 0.0, gap), vec3(1.0, 0.0, gap), vec3(0.0, 1.0, gap)].map(|p| p * scale);
+        let tracer = Tracer::build(&[lower, upper]);
+        let (p, err) = hit_point(&lower, [0.4, 0.3, 0.3]);
+        let r = spawn_ray(p, err, Vec3::Z, Vec3::Z);
+        let h = tracer.closest_hit(&r, RayKind::Specular, &mut RayCounts::default());
+        let h = h.unwrap_or_else(|| panic!("scale {scale}: the upper plate was missed"));
+        assert_eq!(h.tri, 1, "scale {scale}");
+        assert!((h.t / (gap * scale) - 1.0).abs() < 1e-2, "scale {scale}: t = {}", h.t);
+    }
+}
+
+#[test]
+fn degenerate_and_non_finite_triangles_are_never_hit_and_do_not_panic() {
+    let tris = vec![
+        [Vec3::ZERO, Vec3::ZERO, Vec3::ZERO],
+        [vec3(-1.0, 0.0, 0.0), vec3(0.0, 0.0, 0.0), vec3(1.0, 0.0, 0.0)], // collinear
+        [vec3(f32::NAN, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0)],
+        [vec3(f32::INFINITY, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0)],
+    ];
+    let tracer = Tracer::build(&tris);
+    let mut counts = RayCounts::default();
+    for d in [vec3(0.0, 0.0, -1.0), vec3(0.0, -1.0, 0.0), vec3(1.0, 0.0, 0.0)] {
+        let r = Ray::new(-d * 5.0 + vec3(0.0, 0.0, 0.0), d, f32::INFINITY);
+        assert_eq!(tracer.closest_hit(&r, RayKind::Primary, &mut counts), None);
+    }
+    // An empty tracer answers too.
+    let empty = Tracer::build(&[]);
+    let r = Ray::new(Vec3::ZERO, Vec3::X, f32::INFINITY);
+    assert_eq!(empty.closest_hit(&r, RayKind::Primary, &mut counts), None);
+    assert!(!empty.occluded(&r, RayKind::Shadow, &mut counts));
+    // Non-finite rays are counted but hit nothing.
+    let bad = Ray::new(vec3(f32::NAN, 0.0, 0.0), Vec3::X, 1.0);
+    assert!(!tracer.occluded(&bad, RayKind::Shadow, &mut counts));
+}
+
+#[test]
+fn hint_test_matches_full_traversal() {
+    let tris = grid(4);
+    let tracer = Tracer::build(&tris);
+    let ray = Ray::new(vec3(1.3, 2.2, 4.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
+    let full = tracer.closest_hit(&ray, RayKind::Shadow, &mut RayCounts::default()).unwrap();
+    let hint = tracer.hits_triangle(full.tri, &ray).unwrap();
+    assert_eq!(hint, full);
+    assert!(tracer.hits_triangle(full.tri ^ 1, &ray).is_none());
+    assert!(tracer.hits_triangle(u32::MAX, &ray).is_none());
+}
+
+#[test]
+fn counts_add_up_by_kind() {
+    let mut a = RayCounts::default();
+    a.add(RayKind::Primary, 3);
+    a.add(RayKind::Shadow, 5);
+    let mut b = RayCounts::default();
+    b.add(RayKind::Specular, 7);
+    b.add(RayKind::VplShadow, 11);
+    let s: RayCounts = [a, b].into_iter().sum();
+    assert_eq!((s.primary, s.shadow, s.specular, s.vpl_shadow, s.total()), (3, 5, 7, 11, 26));
+}

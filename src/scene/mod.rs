@@ -342,3 +342,21 @@ pub fn load(spec: &str) -> Result<Scene> {
     scene.validate()?;
     Ok(scene)
 }
+
+impl Scene {
+    /// Names of materials with a mirror reflectance that at least one triangle uses.
+    pub fn specular_materials_in_use(&self) -> Vec<String> {
+        let mut used = vec![false; self.materials.len()];
+        for &m in &self.material {
+            if let Some(u) = used.get_mut(m as usize) {
+                *u = true;
+            }
+        }
+        self.materials
+            .iter()
+            .zip(used)
+            .filter(|(m, u)| *u && m.is_specular())
+            .map(|(m, _)| m.name.clone())
+            .collect()
+    }
+}

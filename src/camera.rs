@@ -1,0 +1,46 @@
+//! Pinhole camera rays through pixel centres.
+
+use glam::Vec3;
+
+use crate::scene::Camera;
+
+/// A camera prepared for one image size.
+///
+/// Pixel `(x, y)` (row 0 at the top) is sampled at its centre `(x + 0.5, y + 0.5)`; its ray
+/// direction is `forward + sx * right + sy * up` with
+/// `sx = (2 (x + 0.5) / W - 1) tan(fov_x / 2)` and `sy = (1 - 2 (y + 0.5) / H) tan(fov_y / 2)`.
+/// Without an explicit horizontal fov, `tan(fov_x / 2) = tan(fov_y / 2) W / H` (square pixels).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRays {
+    pub eye: Vec3,
+    pub forward: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub tan_x: f32,
+    pub tan_y: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl CameraRays {
+    /// Builds the camera frame; the camera must have passed `Scene::validate`.
+    pub fn new(cam: &Camera, width: u32, height: u32) -> Self {
+        let forward = cam.forward.normalize();
+        let right = forward.cross(cam.up).normalize();
+        let up = right.cross(forward);
+        let tan_y = (cam.fov_y_deg.to_radians() * 0.5).tan();
+        let tan_x = match cam.fov_x_deg {
+            Some(fx) => (fx.to_radians() * 0.5).tan(),
+            None => tan_y * width as f32 / height as f32,
+        };
+        Self { eye: cam.eye, forward, right, up, tan_x, tan_y, width, height }
+    }
+
+    /// Unnormalised direction through the centre of pixel `(x, y)`.
+    #[inline]
+    pub fn direction(&self, x: u32, y: u32) -> Vec3 {
+        let sx = (2.0 * (x as f32 + 0.5) / self.width as f32 - 1.0) * self.tan_x;
+        let sy = (1.0 - 2.0 * (y as f32 + 0.5) / self.height as f32) * self.tan_y;
+        self.forward + self.right * sx + self.up * sy
+    }
+}

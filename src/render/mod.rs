@@ -1,0 +1,178 @@
+//! One rendering pipeline whose stages take a strategy.
+//!
+//! A frame is a short sequence of passes over named, screen-sized buffers:
+//!
+//! ```text
+//! visibility  -> gbuffer: Vec<Option<SurfaceHit>>      (Visibility::Rays: primary rays)
+//! direct      -> direct:  Vec<Vec3>                    (Shadows::Rays: one shadow ray per light)
+//! specular    -> specular: Vec<Vec3>                   (mirror paths, their hits shaded as above)
+//! compose     -> Film = direct + specular
+//! ```
+//!
+//! The reference (Whitted) renderer and, in later work, the hybrid one are two configurations
+//! of [`Options`], never two renderers. Which passes run is decided by the [`Plan`].
+
+pub mod direct;
+pub mod specular;
+pub mod surface;
+pub mod visibility;
+
+use std::{collections::BTreeMap, time::Instant};
+
+use glam::Vec3;
+use hyrt_tracer::{RayCounts, Tracer};
+use rayon::prelude::*;
+
+pub use surface::SurfaceHit;
+
+use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
+
+/// How primary visibility is found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Visibility {
+    /// One primary ray through each pixel centre.
+    #[default]
+    Rays,
+}
+
+/// How point-light visibility is decided.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shadows {
+    /// One shadow ray per hit and light.
+    #[default]
+    Rays,
+}
+
+/// How indirect light is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Indirect {
+    #[default]
+    None,
+}
+
+impl Visibility {
+    pub fn name(self) -> &'static str {
+        match self {
+            Visibility::Rays => "rays",
+        }
+    }
+}
+
+impl Shadows {
+    pub fn name(self) -> &'static str {
+        match self {
+            Shadows::Rays => "rays",
+        }
+    }
+}
+
+/// The strategy of each stage. `Options::default()` is the Whitted reference.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Options {
+    pub visibility: Visibility,
+    pub shadows: Shadows,
+    pub indirect: Indirect,
+}
+
+/// Per-frame statistics.
+#[derive(Clone, Debug, Default)]
+pub struct FrameStats {
+    pub rays: RayCounts,
+    /// Milliseconds per pass, plus `total` for the frame (scene preparation excluded).
+    pub time_ms: BTreeMap<&'static str, f64>,
+}
+
+/// A rendered frame.
+pub struct Frame {
+    pub film: Film,
+    pub stats: FrameStats,
+}
+
+/// A scene prepared for rendering: its BVH and plan, built once and reused by every frame.
+pub struct Renderer<'a> {
+    pub scene: &'a Scene,
+    pub tracer: Tracer,
+    pub plan: Plan,
+    pub options: Options,
+    pub camera: CameraRays,
+}
+
+/// Called once per finished row of each pass (for progress bars).
+pub type Progress<'p> = &'p (dyn Fn() + Sync);
+
+impl<'a> Renderer<'a> {
+    /// Builds the BVH and the plan. The scene must have passed `Scene::validate`.
+    pub fn new(scene: &'a Scene, options: Options) -> Self {
+        let plan = Plan::new(scene, &options);
+        let tracer = Tracer::build(&scene.positions);
+        let cam = scene.camera.expect("validated scene has a camera");
+        let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
+        Self { scene, tracer, plan, options, camera }
+    }
+
+    /// Wall time of the BVH build, in milliseconds.
+    pub fn bvh_build_ms(&self) -> f64 {
+        self.tracer.build_time().as_secs_f64() * 1e3
+    }
+
+    /// Number of pixel passes that report progress (rows each).
+    pub fn progress_passes(&self) -> u32 {
+        ["visibility", "direct", "specular"].iter().filter(|p| self.plan.runs(p)).count() as u32
+    }
+
+    /// Renders one frame.
+    pub fn render(&self, progress: Progress) -> Frame {
+        let start = Instant::now();
+        let mut stats = FrameStats::default();
+        let (w, h) = (self.scene.settings.width, self.scene.settings.height);
+        let n = w as usize * h as usize;
+
+        let t = Instant::now();
+        let gbuffer = visibility::run(self, progress, &mut stats.rays);
+        stats.time_ms.insert("visibility", ms(t));
+
+        let mut direct = vec![Vec3::ZERO; n];
+        if self.plan.runs("direct") {
+            let t = Instant::now();
+            stats.rays += direct::run(self, &gbuffer, &mut direct, progress);
+            stats.time_ms.insert("direct", ms(t));
+        }
+
+        let mut spec = vec![Vec3::ZERO; n];
+        if self.plan.runs("specular") {
+            let t = Instant::now();
+            stats.rays += specular::run(self, &gbuffer, &mut spec, progress);
+            stats.time_ms.insert("specular", ms(t));
+        }
+
+        let mut film = Film::new(w, h);
+        film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + spec[i]);
+        stats.time_ms.insert("total", ms(start));
+        Frame { film, stats }
+    }
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Runs `f` on every row of `buf` in parallel, each row with its own ray counts; the counts are
+/// summed in row order, so totals do not depend on the thread count.
+pub(crate) fn par_rows<T: Send>(
+    buf: &mut [T],
+    width: usize,
+    progress: Progress,
+    f: impl Fn(u32, &mut [T], &mut RayCounts) + Sync,
+) -> RayCounts {
+    buf.par_chunks_mut(width.max(1))
+        .enumerate()
+        .map(|(y, row)| {
+            let mut c = RayCounts::default();
+            f(y as u32, row, &mut c);
+            progress();
+            c
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .sum()
+}

@@ -1,0 +1,52 @@
+//! Whitted mirror reflection: paths of perfect reflections from camera hits.
+
+use glam::Vec3;
+use hyrt_tracer::{RayCounts, RayKind, spawn_ray};
+
+use super::{Progress, Renderer, SurfaceHit, direct, par_rows};
+
+/// Adds the mirror-reflected light of every camera hit on a specular material.
+pub fn run(r: &Renderer, gbuffer: &[Option<SurfaceHit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
+    let w = r.scene.settings.width as usize;
+    par_rows(out, w, progress, |y, row, c| {
+        let base = y as usize * w;
+        for (x, px) in row.iter_mut().enumerate() {
+            if let Some(hit) = &gbuffer[base + x] {
+                *px = reflected(r, hit, c);
+            }
+        }
+    })
+}
+
+/// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces;
+/// each reflection is weighted by the product of `Ks` so far, and each surface it meets is
+/// shaded with direct light (and its own reflection, while depth remains).
+pub fn reflected(r: &Renderer, first: &SurfaceHit, counts: &mut RayCounts) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    let mut weight = Vec3::ONE;
+    let mut hit = *first;
+    for _ in 0..r.scene.settings.max_depth {
+        let ks = r.scene.materials[r.scene.material[hit.tri as usize] as usize].ks;
+        if ks == Vec3::ZERO {
+            break;
+        }
+        weight *= ks;
+        // Reflect about the shading normal; fall back to the geometric one if that would send
+        // the ray into the surface.
+        let mut dir = reflect(-hit.wo, hit.ns);
+        if dir.dot(hit.ng) <= 0.0 {
+            dir = reflect(-hit.wo, hit.ng);
+        }
+        let ray = spawn_ray(hit.p, hit.p_err, hit.ng, dir);
+        let Some(h) = r.tracer.closest_hit(&ray, RayKind::Specular, counts) else {
+            break;
+        };
+        hit = SurfaceHit::new(r.scene, &h, ray.dir);
+        sum += weight * direct::shade(r, &hit, counts);
+    }
+    sum
+}
+
+fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}

@@ -1,0 +1,61 @@
+//! The stats JSON written by `hyrt render --stats`.
+
+use serde::Serialize;
+
+use crate::{plan::Plan, render::FrameStats, scene::Scene};
+
+/// What one render did: scene, plan, rays by kind, time by pass.
+#[derive(Serialize)]
+pub struct RenderStats<'a> {
+    pub scene: &'a str,
+    pub source: Option<String>,
+    pub triangles: usize,
+    pub lights: usize,
+    pub width: u32,
+    pub height: u32,
+    pub threads: usize,
+    pub options: serde_json::Value,
+    /// Names of the passes that ran, in order.
+    pub plan: Vec<&'static str>,
+    /// Every pass with the reason it ran or was skipped.
+    pub plan_detail: &'a Plan,
+    pub rays: serde_json::Value,
+    /// Milliseconds: `total` (BVH build + frame), `frame`, `bvh_build` and one entry per pass.
+    pub time_ms: serde_json::Map<String, serde_json::Value>,
+}
+
+impl<'a> RenderStats<'a> {
+    pub fn new(scene: &'a Scene, plan: &'a Plan, options: serde_json::Value, frame: &FrameStats, bvh_ms: f64) -> Self {
+        let r = &frame.rays;
+        let mut time_ms = serde_json::Map::new();
+        let frame_ms = frame.time_ms.get("total").copied().unwrap_or(0.0);
+        time_ms.insert("total".into(), (bvh_ms + frame_ms).into());
+        time_ms.insert("frame".into(), frame_ms.into());
+        time_ms.insert("bvh_build".into(), bvh_ms.into());
+        for (k, v) in &frame.time_ms {
+            if *k != "total" {
+                time_ms.insert((*k).into(), (*v).into());
+            }
+        }
+        Self {
+            scene: &scene.name,
+            source: scene.source.as_ref().map(|p| p.display().to_string()),
+            triangles: scene.triangle_count(),
+            lights: scene.lights.len(),
+            width: scene.settings.width,
+            height: scene.settings.height,
+            threads: rayon::current_num_threads(),
+            options,
+            plan: plan.pass_names(),
+            plan_detail: plan,
+            rays: serde_json::json!({
+                "primary": r.primary,
+                "shadow": r.shadow,
+                "specular": r.specular,
+                "vpl_shadow": r.vpl_shadow,
+                "total": r.total(),
+            }),
+            time_ms,
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec3, vec3};
+use hyrt::{
+    render::{Frame, Options, Renderer},
+    scene::{Camera, Material, PointLight, Scene, Settings},
+};
+
+/// The project root (where `Cargo.toml` is).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A path under `../shared/scenes`.
+pub fn shared_scene(rel: &str) -> PathBuf {
+    root().join("../shared/scenes").join(rel)
+}
+
+/// A fresh directory under `target/test-output/<name>` for files a test writes.
+pub fn out_dir(name: &str) -> PathBuf {
+    let d = root().join("target/test-output").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("create test output dir");
+    d
+}
+
+/// Renders a scene with the given options, no progress.
+pub fn render(scene: &Scene, options: Options) -> Frame {
+    Renderer::new(scene, options).render(&|| {})
+}
+
+/// A square of half-size `half` in the plane y = 0 centred at the origin, diffuse `kd`,
+/// seen by a camera straight above at height `cam_h`, with the given lights.
+pub fn floor_scene(half: f32, kd: Vec3, cam_h: f32, fov: f32, lights: Vec<PointLight>, w: u32, h: u32) -> Scene {
+    let mut s = Scene::new("floor");
+    let m = s.add_material(Material::diffuse("floor", kd));
+    s.push_quad(
+        [vec3(-half, 0.0, -half), vec3(-half, 0.0, half), vec3(half, 0.0, half), vec3(half, 0.0, -half)],
+        m,
+    );
+    s.lights = lights;
+    s.camera = Some(Camera { eye: vec3(0.0, cam_h, 0.0), forward: -Vec3::Y, up: -Vec3::Z, fov_y_deg: fov, fov_x_deg: None });
+    s.settings = Settings { width: w, height: h, max_depth: 5, exposure: 1.0 };
+    s.validate().expect("valid test scene");
+    s
+}
+
+/// Runs the `hyrt` binary with arguments; returns (success, stdout, stderr).
+pub fn hyrt(args: &[&str]) -> (bool, String, String) {
+    hyrt_in(&root(), args)
+}
+
+pub fn hyrt_in(dir: &Path, args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hyrt"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run hyrt");
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}

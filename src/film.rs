@@ -85,7 +85,12 @@ pub fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     if path.file_name().is_none() {
         bail!("{}: not a file name", path.display());
     }
-    let tmp = tempfile::Builder::new()
+    let mut builder = tempfile::Builder::new();
+    // Temporary files are private (0600) by default; the finished file should get the usual
+    // permissions (0666 less the umask), like any file the user creates.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let tmp = builder
         .prefix(".hyrt-")
         .suffix(&format!(".{}", path.extension().and_then(|e| e.to_str()).unwrap_or("tmp")))
         .tempfile_in(dir)

@@ -1,0 +1,184 @@
+//! The real binary: determinism of output bytes, stats JSON, compare, and bad input.
+//!
+//! Every bad input must give a clear message naming the file (and line where the format has
+//! lines), a non-zero exit, no panic, and must leave existing outputs untouched.
+
+mod common;
+
+use std::{fs, path::Path};
+
+use common::*;
+
+fn read(p: &Path) -> Vec<u8> {
+    fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+#[test]
+fn one_and_two_threads_write_identical_png_and_exr() {
+    let d = out_dir("threads");
+    for n in ["1", "2"] {
+        let png = d.join(format!("t{n}.png"));
+        let exr = d.join(format!("t{n}.exr"));
+        let (ok, _, err) = hyrt(&[
+            "render", "cornell", "--size", "200x150", "--threads", n, "-q",
+            "-o", png.to_str().unwrap(), "--exr", exr.to_str().unwrap(),
+        ]);
+        assert!(ok, "{err}");
+    }
+    assert!(read(&d.join("t1.png")) == read(&d.join("t2.png")), "PNG bytes differ");
+    assert!(read(&d.join("t1.exr")) == read(&d.join("t2.exr")), "EXR bytes differ");
+}
+
+#[test]
+fn stats_json_has_plan_rays_and_times() {
+    let d = out_dir("stats");
+    let stats = d.join("s.json");
+    let (ok, _, err) = hyrt(&[
+        "render", "cornell", "--size", "64x48", "-q", "-o", d.join("c.png").to_str().unwrap(),
+        "--stats", stats.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
+    assert_eq!(v["scene"], "cornell");
+    assert_eq!(v["width"], 64);
+    assert_eq!(v["height"], 48);
+    assert_eq!(v["triangles"], 32);
+    assert_eq!(v["rays"]["primary"], 64 * 48);
+    let r = &v["rays"];
+    let sum: u64 = ["primary", "shadow", "specular", "vpl_shadow"].iter().map(|k| r[k].as_u64().unwrap()).sum();
+    assert_eq!(r["total"].as_u64().unwrap(), sum);
+    assert_eq!(r["vpl_shadow"], 0);
+    let plan: Vec<&str> = v["plan"].as_array().unwrap().iter().map(|p| p.as_str().unwrap()).collect();
+    assert_eq!(plan, ["bvh_build", "visibility", "direct", "specular"]);
+    assert_eq!(v["plan_detail"]["skipped"][0]["pass"], "indirect");
+    for k in ["total", "frame", "bvh_build", "visibility", "direct", "specular"] {
+        assert!(v["time_ms"][k].as_f64().is_some_and(|t| t >= 0.0), "time_ms.{k} missing");
+    }
+}
+
+#[test]
+fn plan_is_printed() {
+    let d = out_dir("plan");
+    let (ok, _, err) = hyrt(&["render", "cornell", "--size", "32x32", "-o", d.join("c.png").to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(err.contains("run   specular") && err.contains("skip  indirect"), "{err}");
+    let (ok, _, err) =
+        hyrt(&["render", "cornell", "--size", "32x32", "--max-depth", "0", "-o", d.join("c.png").to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(err.contains("skip  specular    max_depth = 0"), "{err}");
+}
+
+#[test]
+fn compare_reports_psnr_and_differences() {
+    let d = out_dir("compare");
+    let (a, b, small, exr) = (d.join("a.png"), d.join("b.png"), d.join("small.png"), d.join("a.exr"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    assert!(hyrt(&["render", "cornell", "--size", "64x64", "-q", "-o", &s(&a), "--exr", &s(&exr)]).0);
+    assert!(hyrt(&["render", "cornell", "--size", "64x64", "-q", "--max-depth", "0", "-o", &s(&b)]).0);
+    assert!(hyrt(&["render", "cornell", "--size", "32x32", "-q", "-o", &s(&small)]).0);
+
+    let (ok, out, _) = hyrt(&["compare", &s(&a), &s(&a)]);
+    assert!(ok && out.contains("PSNR inf dB") && out.contains("0 of 4096 pixels differ"), "{out}");
+
+    let (ok, out, _) = hyrt(&["compare", &s(&a), &s(&b), "--json"]);
+    assert!(ok);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let psnr = v["psnr_db"].as_f64().unwrap();
+    // Without reflections the mirror panel goes black: clearly different, not wildly so.
+    assert!(psnr > 10.0 && psnr < 40.0, "psnr {psnr}");
+    assert!(v["differing_pixels"].as_u64().unwrap() > 50);
+
+    // The EXR through the display transform matches its own 8-bit PNG up to quantisation
+    // (uniform error of at most half a step: PSNR above 20 log10(255 * 2) = 54 dB).
+    let (ok, out, _) = hyrt(&["compare", &s(&a), &s(&exr), "--json"]);
+    assert!(ok);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["psnr_db"].as_f64().unwrap() > 54.0, "{out}");
+
+    let (ok, _, err) = hyrt(&["compare", &s(&a), &s(&small)]);
+    assert!(!ok && err.contains("differ in size: 64x64 vs 32x32"), "{err}");
+    assert!(!err.contains("panicked"));
+}
+
+/// Runs a render that must fail; checks the message, the absence of a panic, and that a
+/// pre-existing output file is untouched and no temporary file is left behind.
+fn assert_fails(dir: &Path, args: &[&str], expected: &[&str]) {
+    let out = dir.join("out.png");
+    fs::write(&out, b"previous output").unwrap();
+    let mut full = vec!["render"];
+    full.extend_from_slice(args);
+    full.extend_from_slice(&["-o", out.to_str().unwrap()]);
+    let (ok, _, err) = hyrt_in(dir, &full);
+    assert!(!ok, "expected failure for {args:?}");
+    assert!(!err.contains("panicked"), "panic for {args:?}: {err}");
+    for e in expected {
+        assert!(err.contains(e), "message for {args:?} should contain '{e}': {err}");
+    }
+    assert_eq!(fs::read(&out).unwrap(), b"previous output", "output was touched");
+    let leftovers: Vec<_> = fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with(".hyrt-"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+const CAMERA: &str = "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\n";
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let d = out_dir("bad_input");
+    let w = |name: &str, text: &str| fs::write(d.join(name), text).unwrap();
+
+    assert_fails(&d, &["no_such_scene"], &["unknown scene 'no_such_scene'", "cornell"]);
+    assert_fails(&d, &["missing.obj"], &["missing.obj"]);
+    assert_fails(&d, &["missing.toml"], &["missing.toml"]);
+
+    w("bad_vertex.obj", "v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n");
+    assert_fails(&d, &["bad_vertex.obj"], &["bad_vertex.obj:3"]);
+
+    w("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
+    assert_fails(&d, &["nan.obj"], &["nan.obj", "NaN"]);
+
+    w("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n");
+    assert_fails(&d, &["inf.obj"], &["inf.obj"]);
+
+    w("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+    assert_fails(&d, &["bad_index.obj"], &["bad_index.obj:4"]);
+
+    w("empty.obj", "# nothing\nv 0 0 0\n");
+    assert_fails(&d, &["empty.obj"], &["empty.obj", "no triangles"]);
+
+    w("with_mtl.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
+    w("bad.mtl", "newmtl m\nKd 0.5 zz 0.5\n");
+    assert_fails(&d, &["with_mtl.obj"], &["bad.mtl:2"]);
+
+    w("bad.gltf", "{ this is not json");
+    assert_fails(&d, &["bad.gltf"], &["bad.gltf"]);
+
+    w("bad_syntax.toml", &format!("{CAMERA}\n[settings]\nwidth = = 3\n"));
+    assert_fails(&d, &["bad_syntax.toml"], &["bad_syntax.toml", "line 7"]);
+
+    w("unknown_key.toml", &format!("{CAMERA}colour = 3\n"));
+    assert_fails(&d, &["unknown_key.toml"], &["unknown_key.toml", "colour"]);
+
+    w("tri.obj", "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n");
+    w("no_mesh.toml", &format!("{CAMERA}\n[[mesh]]\npath = \"nope.obj\"\n"));
+    assert_fails(&d, &["no_mesh.toml"], &["no_mesh.toml", "nope.obj"]);
+
+    w("degenerate_camera.toml",
+        "[camera]\neye = [1.0, 2.0, 3.0]\ntarget = [1.0, 2.0, 3.0]\nfov_y = 40.0\n\n[[mesh]]\npath = \"tri.obj\"\n");
+    assert_fails(&d, &["degenerate_camera.toml"], &["degenerate_camera.toml", "degenerate camera"]);
+
+    w("parallel_up.toml",
+        "[camera]\neye = [0.0, 5.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\n\n[[mesh]]\npath = \"tri.obj\"\n");
+    assert_fails(&d, &["parallel_up.toml"], &["degenerate camera", "parallel"]);
+
+    w("zero_fov.toml", "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 0.0\n\n[[mesh]]\npath = \"tri.obj\"\n");
+    assert_fails(&d, &["zero_fov.toml"], &["degenerate camera", "field of view"]);
+
+    assert_fails(&d, &["cornell", "--size", "0x10"], &["image size 0x10 is empty"]);
+    assert_fails(&d, &["cornell", "--size", "12by10"], &["WxH"]);
+    assert_fails(&d, &["cornell", "--threads", "0"], &["threads"]);
+    assert_fails(&d, &["cornell", "--exr", "no/such/dir/x.exr"], &["no/such/dir/x.exr", "does not exist"]);
+}

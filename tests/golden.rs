@@ -1,0 +1,62 @@
+//! Golden images: renders compared with committed PNGs by PSNR of display luminance.
+//!
+//! Bound: 50 dB. At these sizes a single pixel that changes from black to white gives about
+//! 42-43 dB, so any real change of the image fails, while 1-LSB rounding noise on up to a
+//! third of the pixels (e.g. another libm's `powf` in the sRGB curve) passes.
+//!
+//! A failing comparison writes `<name>.actual.png` and `<name>.diff.png` (absolute luminance
+//! difference, amplified 10x) to `target/test-output/golden/`. Goldens are regenerated only on
+//! purpose: `HYRT_BLESS=1 cargo test --release --test golden`, with the reason in the commit.
+
+mod common;
+
+use common::*;
+use hyrt::{film::Film, metrics, render::Options};
+
+const MIN_PSNR_DB: f64 = 50.0;
+
+fn check(name: &str, spec: &str, w: u32, h: u32) {
+    let mut scene = hyrt::scene::load(spec).unwrap_or_else(|e| panic!("{e:#}"));
+    scene.settings.width = w;
+    scene.settings.height = h;
+    let frame = render(&scene, Options::default());
+    let golden = root().join("tests/golden").join(format!("{name}.png"));
+    if std::env::var_os("HYRT_BLESS").is_some() {
+        std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
+        frame.film.write_png(&golden, scene.settings.exposure).unwrap();
+        eprintln!("blessed {}", golden.display());
+        return;
+    }
+    let out = out_dir(&format!("golden/{name}"));
+    let actual = out.join(format!("{name}.actual.png"));
+    frame.film.write_png(&actual, scene.settings.exposure).unwrap();
+    let a = metrics::read_display_image(&actual).unwrap();
+    let g = metrics::read_display_image(&golden)
+        .unwrap_or_else(|e| panic!("{e:#}; run with HYRT_BLESS=1 to create it"));
+    let c = metrics::compare(&g, &a).unwrap();
+    if c.psnr_db < MIN_PSNR_DB {
+        let mut diff = Film::new(w, h);
+        for (i, p) in diff.pixels.iter_mut().enumerate() {
+            let d = (metrics::luminance(a.pixels[i]) - metrics::luminance(g.pixels[i])).abs() as f32;
+            *p = glam::Vec3::splat(d * 10.0);
+        }
+        diff.write_png(&out.join(format!("{name}.diff.png")), 1.0).unwrap();
+        panic!(
+            "{name}: PSNR {:.2} dB < {MIN_PSNR_DB} dB ({} pixels differ); see {}",
+            c.psnr_db,
+            c.differing_pixels,
+            out.display()
+        );
+    }
+}
+
+#[test]
+fn builtin_cornell() {
+    check("cornell", "cornell", 128, 128);
+}
+
+#[test]
+fn cornell_bunny_mirror() {
+    let spec = root().join("scenes/cornell-bunny-mirror.toml");
+    check("cornell-bunny-mirror", spec.to_str().unwrap(), 160, 120);
+}

@@ -1,1 +1,239 @@
-pub fn placeholder() {}
+//! `hyrt-raster`: a deterministic, tiled, fixed-point z-buffer rasterizer for clip-space
+//! triangles.
+//!
+//! It knows nothing about scenes, cameras or lights: it takes triangles already transformed to
+//! clip space (by whatever projection the caller uses: a camera, a shadow-map frustum...) and
+//! returns, per pixel, the visible triangle's id, its depth and its perspective-correct
+//! barycentrics.
+//!
+//! # Conventions
+//!
+//! * **Clip space** is the wgpu / D3D / Vulkan one: a point `(x, y, z, w)` is visible when
+//!   `-w <= x <= w`, `-w <= y <= w` and `0 <= z <= w`. NDC is `(x, y, z) / w`; NDC `y = +1` is the
+//!   top of the image: what `glam::camera::rh::proj::directx::{perspective, orthographic}` produce.
+//! * **Depth** stored is NDC `z / w`, in `[0, 1]`, smaller is closer. Triangles are clipped against
+//!   the near (`z = 0`) and far (`z = w`) planes, so depths outside `[0, 1]` never appear.
+//! * **Pixels**: pixel `(x, y)` covers `[x, x + 1) x [y, y + 1)` in screen space, with `y` growing
+//!   downwards (row 0 is the top row, buffers are row-major). Coverage and attributes are sampled at
+//!   the pixel centre `(x + 1/2, y + 1/2)`.
+//! * **Front faces** are counter-clockwise in NDC (the wgpu / OpenGL default). Back faces are drawn
+//!   unless [`RasterOptions::cull_backfaces`] is set.
+//! * **Barycentrics** `(b1, b2)` are relative to the vertices of the triangle as passed in (even
+//!   when it was clipped), perspective-correct; the point is `(1 - b1 - b2) v0 + b1 v1 + b2 v2` in
+//!   any space in which the triangle is affine (world, view, clip).
+//! * **Ties**: when two triangles have the same depth at a pixel, the smaller id wins (then the
+//!   earlier triangle in the slice, for equal ids), so the result does not depend on the triangle
+//!   order or on the number of threads.
+//!
+//! # Precision and limits
+//!
+//! Vertices are snapped to 1/256 pixel (8 sub-pixel bits) and coverage is decided with exact `i64`
+//! edge functions and the top-left fill rule: a closed or shared-edge mesh covers every pixel
+//! centre exactly once. The side planes are handled with a *guard band*: triangles are clipped only
+//! where they reach more than `2^19` pixels outside the image (which keeps fixed-point products in
+//! `i64`), so large triangles crossing the image border are rasterized unclipped. Targets may be at
+//! most [`MAX_TARGET_DIM`] pixels on a side. Triangles with a NaN or infinite coordinate, zero
+//! (snapped) area, or id [`EMPTY_ID`] are skipped; no input can write outside the buffers.
+//!
+//! # Structure
+//!
+//! Each stage is one private module whose docs derive its math:
+//!
+//! * `clip.rs`: homogeneous clipping (near, far, guard band), barycentrics carried as attributes;
+//! * `setup.rs`: viewport transform, fixed-point snapping and ranges, facing, interpolation
+//!   constants (depth, perspective-correct barycentrics);
+//! * `edge.rs`: edge functions, top-left fill rule, 8x8 block rejection/acceptance;
+//! * `tile.rs`: parallel setup, binning, parallel tile rendering, deterministic placement.
+
+mod clip;
+mod edge;
+mod setup;
+mod tile;
+
+use glam::Vec4;
+
+use setup::{SetupContext, SetupTri};
+
+/// Id stored in [`Target::id`] for pixels no triangle covers. Triangles with this id are skipped.
+pub const EMPTY_ID: u32 = u32::MAX;
+
+/// Depth stored in [`Target::depth`] for pixels no triangle covers.
+pub const EMPTY_DEPTH: f32 = f32::INFINITY;
+
+/// Largest supported target width or height, in pixels.
+pub const MAX_TARGET_DIM: u32 = 1 << 16;
+
+/// Number of fractional bits of the snapped screen-space vertex coordinates.
+pub const SUBPIXEL_BITS: u32 = setup::SUBPIXEL_BITS;
+
+/// Result of [`rasterize`]: row-major per-pixel buffers of `width * height` elements
+/// (index `y * width + x`, row 0 at the top).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Target {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Depth `z / w` of the visible surface in `[0, 1]`, or [`EMPTY_DEPTH`].
+    pub depth: Vec<f32>,
+    /// Id of the visible triangle, or [`EMPTY_ID`].
+    pub id: Vec<u32>,
+    /// Perspective-correct barycentrics `(b1, b2)` of the pixel centre in the visible triangle
+    /// (`b0 = 1 - b1 - b2`), relative to its original, unclipped vertices; `[0, 0]` when empty.
+    pub bary: Vec<[f32; 2]>,
+}
+
+impl Target {
+    /// A target with every pixel empty.
+    pub fn empty(width: u32, height: u32) -> Self {
+        let len = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            depth: vec![EMPTY_DEPTH; len],
+            id: vec![EMPTY_ID; len],
+            bary: vec![[0.0; 2]; len],
+        }
+    }
+
+    /// Buffer index of pixel `(x, y)`.
+    #[inline]
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.width as usize + x as usize
+    }
+}
+
+/// Options of [`rasterize`], [`coverage_count`] and [`for_each_fragment`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RasterOptions {
+    /// Side of the square screen tiles rendered in parallel, in pixels. Rounded up to a multiple of
+    /// 8 and clamped to `[8, 4096]`. It affects speed only, never the result. Default 64.
+    pub tile_size: u32,
+    /// Skip triangles that are clockwise in NDC (back faces for counter-clockwise front faces).
+    /// Default `false`: surfaces are two-sided.
+    pub cull_backfaces: bool,
+}
+
+impl Default for RasterOptions {
+    fn default() -> Self {
+        Self { tile_size: 64, cull_backfaces: false }
+    }
+}
+
+/// One pixel covered by a triangle, as reported by [`for_each_fragment`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fragment {
+    /// Pixel column, `< width`.
+    pub x: u32,
+    /// Pixel row, `< height` (0 at the top).
+    pub y: u32,
+    /// Depth `z / w` at the pixel centre, in `[0, 1]`.
+    pub depth: f32,
+    /// Perspective-correct barycentrics `(b1, b2)` in the original triangle.
+    pub bary: [f32; 2],
+}
+
+/// The z-buffer entry of one pixel while tiles are rendered.
+#[derive(Clone, Copy, Debug)]
+struct Pixel {
+    depth: f32,
+    id: u32,
+    bary: [f32; 2],
+}
+
+fn check_dims(width: u32, height: u32) {
+    assert!(
+        width <= MAX_TARGET_DIM && height <= MAX_TARGET_DIM,
+        "target {width}x{height} exceeds MAX_TARGET_DIM = {MAX_TARGET_DIM}"
+    );
+}
+
+/// Rasterizes clip-space triangles with a z-buffer, returning the visible triangle, depth and
+/// barycentrics per pixel.
+///
+/// `tris[i]` has id `ids[i]`; ids need not be unique or ordered, but they break depth ties (the
+/// smaller wins) and [`EMPTY_ID`] is reserved. A `width` or `height` of 0 gives empty buffers.
+/// The result is identical for any rayon thread count, tile size and triangle order (for unique
+/// ids).
+///
+/// # Panics
+///
+/// If `tris.len() != ids.len()` or a dimension exceeds [`MAX_TARGET_DIM`].
+pub fn rasterize(tris: &[[Vec4; 3]], ids: &[u32], width: u32, height: u32, opts: &RasterOptions) -> Target {
+    assert_eq!(tris.len(), ids.len(), "one id per triangle");
+    check_dims(width, height);
+    if width == 0 || height == 0 {
+        return Target::empty(width, height);
+    }
+    let ctx = SetupContext::new(width, height, opts.cull_backfaces);
+    let setup = tile::setup_all(tris, Some(ids), &ctx);
+    let empty = Pixel { depth: EMPTY_DEPTH, id: EMPTY_ID, bary: [0.0; 2] };
+    let tiles =
+        tile::render(&setup, width, height, opts.tile_size, empty, |tri: &SetupTri, px: &mut Pixel, e| {
+            // Lexicographic (depth, id): a total order on fragments, so the surviving fragment is
+            // the same whatever order they arrive in. NaN never wins (comparisons are false).
+            let depth = tri.depth(e);
+            if depth < px.depth || (depth == px.depth && tri.id < px.id) {
+                *px = Pixel { depth, id: tri.id, bary: tri.bary(e) };
+            }
+        });
+    let mut target = Target::empty(width, height);
+    tiles.place(&mut target.depth, |p| p.depth);
+    tiles.place(&mut target.id, |p| p.id);
+    tiles.place(&mut target.bary, |p| p.bary);
+    target
+}
+
+/// Counts, per pixel, how many triangles cover the pixel centre (no depth test), with exactly the
+/// coverage rules of [`rasterize`]. Row-major, `width * height` entries.
+///
+/// Meant for validation (watertightness: a closed mesh drawn with
+/// [`RasterOptions::cull_backfaces`] covers each pixel of its silhouette exactly once) and overdraw
+/// statistics.
+///
+/// # Panics
+///
+/// If a dimension exceeds [`MAX_TARGET_DIM`].
+pub fn coverage_count(tris: &[[Vec4; 3]], width: u32, height: u32, opts: &RasterOptions) -> Vec<u32> {
+    check_dims(width, height);
+    if width == 0 || height == 0 {
+        return Vec::new();
+    }
+    let ctx = SetupContext::new(width, height, opts.cull_backfaces);
+    let setup = tile::setup_all(tris, None, &ctx);
+    let tiles = tile::render(&setup, width, height, opts.tile_size, 0u32, |_, n, _| {
+        *n = n.saturating_add(1);
+    });
+    let mut count = vec![0; width as usize * height as usize];
+    tiles.place(&mut count, |&n| n);
+    count
+}
+
+/// Calls `f` once for every pixel whose centre the triangle covers, with the depth and
+/// barycentrics [`rasterize`] would store there (before the depth test). Sequential; pixels of a
+/// clipped triangle may come in several runs. `opts.tile_size` is ignored.
+///
+/// # Panics
+///
+/// If a dimension exceeds [`MAX_TARGET_DIM`].
+pub fn for_each_fragment(
+    tri: &[Vec4; 3],
+    width: u32,
+    height: u32,
+    opts: &RasterOptions,
+    mut f: impl FnMut(Fragment),
+) {
+    check_dims(width, height);
+    if width == 0 || height == 0 {
+        return;
+    }
+    let ctx = SetupContext::new(width, height, opts.cull_backfaces);
+    let mut setup = Vec::new();
+    setup::setup_triangle(tri, 0, &ctx, &mut clip::ClipScratch::new(), &mut setup);
+    for t in &setup {
+        let [x0, y0, x1, y1] = t.bbox;
+        edge::raster_rect(t, [x0, y0, x1 + 1, y1 + 1], |x, y, e| {
+            f(Fragment { x, y, depth: t.depth(e), bary: t.bary(e) });
+        });
+    }
+}

@@ -1,0 +1,333 @@
+//! Triangle setup: clip, project to fixed-point screen coordinates, orient, fan-triangulate, and
+//! precompute the interpolation constants. Everything here runs once per input triangle; the
+//! per-pixel work is in [`crate::edge`] and [`SetupTri::depth`] / [`SetupTri::bary`].
+//!
+//! # Viewport transform
+//!
+//! NDC `(x, y) = (x_c / w, y_c / w)` in `[-1, 1]^2`, y up, maps to pixels, y down:
+//!
+//! ```text
+//!     sx = (x + 1) / 2 * width          sy = (1 - y) / 2 * height
+//! ```
+//!
+//! so pixel `(px, py)` covers `[px, px + 1) x [py, py + 1)` and is sampled at its centre
+//! `(px + 1/2, py + 1/2)`.
+//!
+//! # Fixed point
+//!
+//! Screen coordinates are rounded to `1 / 2^SUBPIXEL_BITS` pixel (`SUBPIXEL_BITS = 8`) and stored
+//! as integers. Rounding happens once per vertex, so two triangles sharing a vertex share its
+//! snapped position exactly, and all coverage decisions after this point are exact integer
+//! arithmetic (see [`crate::edge`] for the edge functions and their bounds).
+//!
+//! The clipper guarantees `|sx|, |sy| <= GUARD_BAND_PX = 2^19` px, i.e. `|X| <= 2^27` in fixed
+//! point; anything beyond [`MAX_FIXED`] `= 2^28` (twice that, to absorb rounding) is rejected as a
+//! safety net. Sample positions are in `[0, 2^24]` (targets are at most `2^16` px wide). Hence
+//! coordinate differences are below `2^29`, a 2x2 cross product below `2^59`, and an edge function
+//! value at any sample below `2^60`: `i64` never overflows.
+//!
+//! # Orientation and culling
+//!
+//! With y pointing down, a triangle that is counter-clockwise in NDC (the wgpu/OpenGL default
+//! front face) has a *negative* signed area `cross(v1 - v0, v2 - v0)` in screen space. The
+//! orientation of a (clipped) polygon is the sign of its snapped signed area (the sum of its fan
+//! triangles' areas, in `i128`), exactly as GPUs decide facing from snapped coordinates.
+//! Every fan triangle is then re-ordered to positive area so that the edge functions are positive
+//! inside. A fan triangle whose snapped area has the opposite sign to its polygon's is a snapping
+//! artifact of a sliver and is dropped; zero-area triangles are dropped too (they cover no sample
+//! and their interpolation would divide by zero).
+
+use glam::{DVec2, DVec4, Vec4};
+
+use crate::clip::{ClipScratch, Clipped, GuardBand, MAX_POLY_VERTS, clip_triangle};
+
+/// Sub-pixel precision of the snapped vertex coordinates.
+pub(crate) const SUBPIXEL_BITS: u32 = 8;
+/// One pixel in fixed-point units.
+pub(crate) const SUBPIXEL_ONE: i64 = 1 << SUBPIXEL_BITS;
+/// Half a pixel: pixel centres are at `px * SUBPIXEL_ONE + HALF_PIXEL`.
+pub(crate) const HALF_PIXEL: i64 = SUBPIXEL_ONE / 2;
+/// Largest accepted fixed-point coordinate magnitude (see the module docs).
+pub(crate) const MAX_FIXED: i64 = 1 << 28;
+
+/// Per-target constants of the setup.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SetupContext {
+    pub width: u32,
+    pub height: u32,
+    pub guard: GuardBand,
+    pub cull_backfaces: bool,
+}
+
+impl SetupContext {
+    pub fn new(width: u32, height: u32, cull_backfaces: bool) -> Self {
+        Self { width, height, guard: GuardBand::for_target(width, height), cull_backfaces }
+    }
+}
+
+/// A triangle ready for rasterization: positively oriented fixed-point vertices, its pixel bounds
+/// within the target, and interpolation constants.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SetupTri {
+    /// Fixed-point screen coordinates, ordered so that `cross(v1 - v0, v2 - v0) > 0`.
+    pub v: [[i32; 2]; 3],
+    /// Inclusive pixel bounds `[x0, y0, x1, y1]` of the samples that may be covered, already
+    /// clamped to the target (never empty).
+    pub bbox: [u32; 4],
+    pub id: u32,
+    /// Depth plane: `z/w = z0 + e1 * dz[0] + e2 * dz[1]`, with `e_i` the edge functions (below).
+    z0: f64,
+    dz: [f64; 2],
+    /// Per vertex `i`: `[q_i, q_i * b1_i, q_i * b2_i]` where `q_i` is proportional to `1 / w_i` and
+    /// `(b1_i, b2_i)` are the vertex's barycentrics in the original triangle. `f32` (relative
+    /// error 6e-8 on the result) keeps the struct small; the sums are done in `f64`.
+    persp: [[f32; 3]; 3],
+}
+
+impl SetupTri {
+    /// Depth `z/w` at a sample with (unbiased) edge functions `e = [e0, e1, e2]`.
+    ///
+    /// `e_i` is the edge function of the edge *opposite* vertex `i`, so the screen-space
+    /// barycentrics are `λ_i = e_i / area` (with `e0 + e1 + e2 = area`). `z/w` is affine in screen
+    /// space (the projective map sends planes to planes), so it interpolates linearly:
+    /// `z = z0 + λ1 (z1 - z0) + λ2 (z2 - z0)`. Computed in `f64` from exact integer `e_i`, the
+    /// result depends only on the triangle and the pixel, never on tiling or threads.
+    #[inline]
+    pub fn depth(&self, e: [i64; 3]) -> f32 {
+        let d = self.z0 + e[1] as f64 * self.dz[0] + e[2] as f64 * self.dz[1];
+        d.clamp(0.0, 1.0) as f32
+    }
+
+    /// Perspective-correct `(b1, b2)` of the original triangle at a sample with edge functions `e`.
+    ///
+    /// An attribute `a` that is linear on the triangle in 3D is *not* linear in screen space, but
+    /// `a / w` and `1 / w` are. With screen barycentrics `λ_i ∝ e_i`:
+    ///
+    /// ```text
+    ///     a = Σ λ_i a_i / w_i  /  Σ λ_i / w_i  =  Σ e_i q_i a_i  /  Σ e_i q_i
+    /// ```
+    ///
+    /// (the `1 / area` and any common scale of `q_i ∝ 1 / w_i` cancel). The attributes are the
+    /// original triangle's barycentrics carried through the clipper, so clipped triangles report
+    /// barycentrics relative to the unclipped one. The result is a convex combination of the
+    /// vertices' barycentrics (`e_i >= 0`, `q_i > 0`), hence inside the original triangle up to
+    /// rounding.
+    #[inline]
+    pub fn bary(&self, e: [i64; 3]) -> [f32; 2] {
+        let [p0, p1, p2] = self.persp.map(|p| p.map(f64::from));
+        let (e0, e1, e2) = (e[0] as f64, e[1] as f64, e[2] as f64);
+        let den = e0 * p0[0] + e1 * p1[0] + e2 * p2[0];
+        if den <= 0.0 {
+            // Unreachable for covered samples (some e_i > 0); kept so no input can divide by 0.
+            return [0.0, 0.0];
+        }
+        let b1 = (e0 * p0[1] + e1 * p1[1] + e2 * p2[1]) / den;
+        let b2 = (e0 * p0[2] + e1 * p1[2] + e2 * p2[2]) / den;
+        [b1 as f32, b2 as f32]
+    }
+}
+
+/// A polygon vertex after the viewport transform.
+#[derive(Clone, Copy, Debug, Default)]
+struct Projected {
+    /// Fixed-point screen position.
+    x: i64,
+    y: i64,
+    /// Depth `z / w`.
+    z: f64,
+    /// `1 / w` (finite, > 0).
+    inv_w: f64,
+    /// `(b1, b2)` in the original triangle.
+    bary: DVec2,
+}
+
+/// Rounds a screen coordinate in pixels to fixed point, `None` outside `±MAX_FIXED` (or NaN).
+///
+/// Rounds half up, `floor(x + 1/2)`, which is translation invariant. It is written with a
+/// truncating cast because `f64::round` / `floor` are library calls on baseline x86-64, and this
+/// runs for every vertex.
+#[inline]
+fn to_fixed(px: f64) -> Option<i64> {
+    let f = px * SUBPIXEL_ONE as f64 + 0.5;
+    if f.is_nan() || f.abs() > MAX_FIXED as f64 {
+        return None;
+    }
+    let t = f as i64; // truncates towards zero; exact and in range after the check above
+    Some(if t as f64 > f { t - 1 } else { t })
+}
+
+#[inline]
+fn project(pos: DVec4, bary: DVec2, ctx: &SetupContext) -> Option<Projected> {
+    // w > 0 is guaranteed by the near/far clip except for the degenerate vertex (0,0,0,0); a
+    // denormal w could still make 1/w overflow, hence the finiteness check.
+    if pos.w <= 0.0 {
+        return None;
+    }
+    let inv_w = 1.0 / pos.w;
+    if !inv_w.is_finite() {
+        return None;
+    }
+    let (nx, ny) = (pos.x * inv_w, pos.y * inv_w);
+    let sx = (nx + 1.0) * 0.5 * f64::from(ctx.width);
+    let sy = (1.0 - ny) * 0.5 * f64::from(ctx.height);
+    Some(Projected { x: to_fixed(sx)?, y: to_fixed(sy)?, z: pos.z * inv_w, inv_w, bary })
+}
+
+/// `cross(b - a, c - a)`: twice the signed area, positive for clockwise-on-screen (y down).
+#[inline]
+pub(crate) fn cross(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// `ceil(a / b)` for `b > 0`.
+fn div_ceil_i64(a: i64, b: i64) -> i64 {
+    -((-a).div_euclid(b))
+}
+
+/// Sets up one clip-space triangle, appending 0 or more [`SetupTri`]s (more than one only when
+/// clipping turned it into a polygon).
+pub(crate) fn setup_triangle(
+    tri: &[Vec4; 3],
+    id: u32,
+    ctx: &SetupContext,
+    scratch: &mut ClipScratch,
+    out: &mut Vec<SetupTri>,
+) {
+    if !tri.iter().all(|v| v.is_finite()) {
+        return;
+    }
+    let tri = tri.map(|v| v.as_dvec4());
+    match clip_triangle(&tri, ctx.guard, scratch) {
+        Clipped::Rejected => {}
+        Clipped::Inside => {
+            let bary = [DVec2::ZERO, DVec2::X, DVec2::Y];
+            let (Some(p0), Some(p1), Some(p2)) =
+                (project(tri[0], bary[0], ctx), project(tri[1], bary[1], ctx), project(tri[2], bary[2], ctx))
+            else {
+                return;
+            };
+            setup_polygon(&[p0, p1, p2], id, ctx, out);
+        }
+        Clipped::Polygon(poly) => {
+            let poly = poly.as_slice();
+            let mut pv = [Projected::default(); MAX_POLY_VERTS];
+            for (p, v) in pv.iter_mut().zip(poly) {
+                match project(v.pos, v.bary, ctx) {
+                    Some(projected) => *p = projected,
+                    None => return,
+                }
+            }
+            setup_polygon(&pv[..poly.len()], id, ctx, out);
+        }
+    }
+}
+
+/// Orients, culls and fan-triangulates a projected convex polygon (at least 3 vertices).
+fn setup_polygon(pv: &[Projected], id: u32, ctx: &SetupContext, out: &mut Vec<SetupTri>) {
+    let xy = |p: &Projected| [p.x, p.y];
+    // Signed area of the snapped polygon decides the facing (module docs). For a triangle it is
+    // a single i64 cross product; a polygon sums up to 14 of them (< 2^63 each), hence i128.
+    let area: i128 = if pv.len() == 3 {
+        i128::from(cross(xy(&pv[0]), xy(&pv[1]), xy(&pv[2])))
+    } else {
+        (1..pv.len() - 1).map(|i| i128::from(cross(xy(&pv[0]), xy(&pv[i]), xy(&pv[i + 1])))).sum()
+    };
+    if area == 0 {
+        return;
+    }
+    let front_facing = area < 0;
+    if ctx.cull_backfaces && !front_facing {
+        return;
+    }
+
+    for i in 1..pv.len() - 1 {
+        let (a, mut b, mut c) = (pv[0], pv[i], pv[i + 1]);
+        let mut tri_area = cross(xy(&a), xy(&b), xy(&c));
+        if tri_area == 0 || (tri_area > 0) != (area > 0) {
+            continue;
+        }
+        if tri_area < 0 {
+            std::mem::swap(&mut b, &mut c);
+            tri_area = -tri_area;
+        }
+        let verts = [a, b, c];
+
+        // Pixel bounds: pixel px is sampled at px*ONE + HALF, so the samples inside
+        // [min_x, max_x] are px in [ceil((min_x - HALF) / ONE), floor((max_x - HALF) / ONE)].
+        let min_x = verts.iter().map(|p| p.x).min().unwrap_or(0);
+        let max_x = verts.iter().map(|p| p.x).max().unwrap_or(0);
+        let min_y = verts.iter().map(|p| p.y).min().unwrap_or(0);
+        let max_y = verts.iter().map(|p| p.y).max().unwrap_or(0);
+        let x0 = div_ceil_i64(min_x - HALF_PIXEL, SUBPIXEL_ONE).max(0);
+        let y0 = div_ceil_i64(min_y - HALF_PIXEL, SUBPIXEL_ONE).max(0);
+        let x1 = (max_x - HALF_PIXEL).div_euclid(SUBPIXEL_ONE).min(i64::from(ctx.width) - 1);
+        let y1 = (max_y - HALF_PIXEL).div_euclid(SUBPIXEL_ONE).min(i64::from(ctx.height) - 1);
+        if x0 > x1 || y0 > y1 {
+            continue;
+        }
+
+        let inv_area = 1.0 / tri_area as f64;
+        // q_i = (1 / w_i) / max_j (1 / w_j) in (0, 1]: proportional to 1 / w_i, and in range of
+        // f32 whatever w is.
+        let scale = 1.0 / verts.iter().map(|p| p.inv_w).fold(0.0, f64::max);
+        let persp = verts.map(|p| {
+            let q = p.inv_w * scale;
+            [q as f32, (q * p.bary.x) as f32, (q * p.bary.y) as f32]
+        });
+        out.push(SetupTri {
+            // In range by the MAX_FIXED check in `to_fixed`.
+            v: verts.map(|p| [p.x as i32, p.y as i32]),
+            // In [0, width) x [0, height) by the clamps above.
+            bbox: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
+            id,
+            z0: a.z,
+            dz: [(b.z - a.z) * inv_area, (c.z - a.z) * inv_area],
+            persp,
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_bounds_hold() {
+        // The largest coordinates the guard band admits, plus rounding slack, stay below
+        // MAX_FIXED, and the worst edge function value fits i64 with room to spare.
+        let guard_fixed = crate::clip::GUARD_BAND_PX as i64 * SUBPIXEL_ONE;
+        assert!(2 * guard_fixed <= MAX_FIXED);
+        let max_diff = 2 * MAX_FIXED as i128;
+        let max_sample = (1i128 << 16) * SUBPIXEL_ONE as i128;
+        let max_edge = 2 * max_diff * (MAX_FIXED as i128 + max_sample);
+        assert!(max_edge < (1i128 << 61));
+    }
+
+    #[test]
+    fn to_fixed_rounds_half_up_and_rejects_out_of_range() {
+        assert_eq!(to_fixed(0.0), Some(0));
+        assert_eq!(to_fixed(1.5), Some(384));
+        assert_eq!(to_fixed(0.5 / 256.0), Some(1));
+        assert_eq!(to_fixed(-0.5 / 256.0), Some(0));
+        assert_eq!(to_fixed(-1.5 / 256.0), Some(-1));
+        assert_eq!(to_fixed(-1.7 / 256.0), Some(-2));
+        assert_eq!(to_fixed(1e12), None);
+        assert_eq!(to_fixed(-1e12), None);
+        assert_eq!(to_fixed(f64::NAN), None);
+    }
+
+    #[test]
+    fn ccw_in_ndc_is_front_facing() {
+        let ccw =
+            [Vec4::new(-0.5, -0.5, 0.5, 1.0), Vec4::new(0.5, -0.5, 0.5, 1.0), Vec4::new(0.0, 0.5, 0.5, 1.0)];
+        let cw = [ccw[0], ccw[2], ccw[1]];
+        let ctx = SetupContext::new(16, 16, true);
+        let mut scratch = ClipScratch::new();
+        let mut out = Vec::new();
+        setup_triangle(&ccw, 0, &ctx, &mut scratch, &mut out);
+        assert_eq!(out.len(), 1);
+        out.clear();
+        setup_triangle(&cw, 0, &ctx, &mut scratch, &mut out);
+        assert!(out.is_empty());
+    }
+}

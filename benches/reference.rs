@@ -21,11 +21,18 @@ fn main() {
     let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     let frames: usize = std::env::var("HYRT_BENCH_FRAMES").ok().and_then(|s| s.parse().ok()).unwrap_or(7);
     let root = env!("CARGO_MANIFEST_DIR");
-    let scenes: Vec<String> = std::env::var("HYRT_BENCH_SCENES").map(|s| s.split(',').map(String::from).collect()).unwrap_or_else(|_| {
-        ["cornell-bunny-mirror", "conference", "office"].iter().map(|s| format!("{root}/scenes/{s}.toml")).collect()
-    });
-    let pools: Vec<(usize, rayon::ThreadPool)> =
-        [1, 2].iter().map(|&n| (n, rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap())).collect();
+    let scenes: Vec<String> = std::env::var("HYRT_BENCH_SCENES")
+        .map(|s| s.split(',').map(String::from).collect())
+        .unwrap_or_else(|_| {
+            ["cornell-bunny-mirror", "conference", "office"]
+                .iter()
+                .map(|s| format!("{root}/scenes/{s}.toml"))
+                .collect()
+        });
+    let pools: Vec<(usize, rayon::ThreadPool)> = [1, 2]
+        .iter()
+        .map(|&n| (n, rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()))
+        .collect();
 
     println!("reference (Whitted) at 640x480, median of {frames} frames, threads alternated per frame\n");
     println!("| scene | triangles | BVH build ms | threads | frame ms | rays/frame | M rays/s | speed-up |");

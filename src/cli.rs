@@ -77,7 +77,8 @@ pub struct CompareArgs {
 
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, e.g. 640x480, got '{s}'"))?;
-    let p = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("expected WxH with whole numbers, got '{s}'"));
+    let p =
+        |v: &str| v.trim().parse::<u32>().map_err(|_| format!("expected WxH with whole numbers, got '{s}'"));
     Ok((p(w)?, p(h)?))
 }
 
@@ -142,7 +143,8 @@ fn render(a: &RenderArgs) -> Result<()> {
         indicatif::ProgressBar::hidden()
     } else {
         let total = u64::from(scene.settings.height) * u64::from(renderer.progress_passes());
-        let b = indicatif::ProgressBar::with_draw_target(Some(total), indicatif::ProgressDrawTarget::stderr());
+        let b =
+            indicatif::ProgressBar::with_draw_target(Some(total), indicatif::ProgressDrawTarget::stderr());
         b.set_style(
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}")
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -180,7 +182,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         });
         let stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, renderer.bvh_build_ms());
         let json = serde_json::to_string_pretty(&stats)?;
-        atomic_write(p, |tmp| std::fs::write(tmp, json.as_bytes() ).map_err(Into::into))?;
+        atomic_write(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?;
         say(format!("wrote {}", p.display()));
     }
     Ok(())

@@ -96,6 +96,7 @@ pub fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
         .tempfile_in(dir)
         .with_context(|| format!("{}: cannot create a file in {}", path.display(), dir.display()))?;
     write(tmp.path()).with_context(|| format!("{}: cannot write image", path.display()))?;
-    tmp.persist(path).with_context(|| format!("{}: cannot move the finished file into place", path.display()))?;
+    tmp.persist(path)
+        .with_context(|| format!("{}: cannot move the finished file into place", path.display()))?;
     Ok(())
 }

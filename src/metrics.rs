@@ -80,9 +80,8 @@ pub fn read_display_image(path: &Path) -> Result<DisplayImage> {
             pixels: img.layer_data.channel_data.pixels.1,
         })
     } else {
-        let img = image::open(path)
-            .with_context(|| format!("{}: cannot read image", path.display()))?
-            .to_rgb32f();
+        let img =
+            image::open(path).with_context(|| format!("{}: cannot read image", path.display()))?.to_rgb32f();
         let (width, height) = img.dimensions();
         let pixels = img.pixels().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
         Ok(DisplayImage { width, height, pixels })
@@ -92,6 +91,10 @@ pub fn read_display_image(path: &Path) -> Result<DisplayImage> {
 impl DisplayImage {
     /// The display image of a film, without 8-bit quantisation.
     pub fn from_film(f: &crate::film::Film, exposure: f32) -> Self {
-        Self { width: f.width, height: f.height, pixels: f.pixels.iter().map(|&p| display(p, exposure)).collect() }
+        Self {
+            width: f.width,
+            height: f.height,
+            pixels: f.pixels.iter().map(|&p| display(p, exposure)).collect(),
+        }
     }
 }

@@ -36,7 +36,10 @@ impl Plan {
             plan.add(
                 true,
                 "direct",
-                format!("{lights} point light(s), {}: one shadow ray per lit hit and light", opts.shadows.name()),
+                format!(
+                    "{lights} point light(s), {}: one shadow ray per lit hit and light",
+                    opts.shadows.name()
+                ),
             );
         }
 

@@ -25,7 +25,13 @@ pub struct RenderStats<'a> {
 }
 
 impl<'a> RenderStats<'a> {
-    pub fn new(scene: &'a Scene, plan: &'a Plan, options: serde_json::Value, frame: &FrameStats, bvh_ms: f64) -> Self {
+    pub fn new(
+        scene: &'a Scene,
+        plan: &'a Plan,
+        options: serde_json::Value,
+        frame: &FrameStats,
+        bvh_ms: f64,
+    ) -> Self {
         let r = &frame.rays;
         let mut time_ms = serde_json::Map::new();
         let frame_ms = frame.time_ms.get("total").copied().unwrap_or(0.0);

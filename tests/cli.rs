@@ -20,8 +20,17 @@ fn one_and_two_threads_write_identical_png_and_exr() {
         let png = d.join(format!("t{n}.png"));
         let exr = d.join(format!("t{n}.exr"));
         let (ok, _, err) = hyrt(&[
-            "render", "cornell", "--size", "200x150", "--threads", n, "-q",
-            "-o", png.to_str().unwrap(), "--exr", exr.to_str().unwrap(),
+            "render",
+            "cornell",
+            "--size",
+            "200x150",
+            "--threads",
+            n,
+            "-q",
+            "-o",
+            png.to_str().unwrap(),
+            "--exr",
+            exr.to_str().unwrap(),
         ]);
         assert!(ok, "{err}");
     }
@@ -34,8 +43,15 @@ fn stats_json_has_plan_rays_and_times() {
     let d = out_dir("stats");
     let stats = d.join("s.json");
     let (ok, _, err) = hyrt(&[
-        "render", "cornell", "--size", "64x48", "-q", "-o", d.join("c.png").to_str().unwrap(),
-        "--stats", stats.to_str().unwrap(),
+        "render",
+        "cornell",
+        "--size",
+        "64x48",
+        "-q",
+        "-o",
+        d.join("c.png").to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
@@ -45,7 +61,8 @@ fn stats_json_has_plan_rays_and_times() {
     assert_eq!(v["triangles"], 32);
     assert_eq!(v["rays"]["primary"], 64 * 48);
     let r = &v["rays"];
-    let sum: u64 = ["primary", "shadow", "specular", "vpl_shadow"].iter().map(|k| r[k].as_u64().unwrap()).sum();
+    let sum: u64 =
+        ["primary", "shadow", "specular", "vpl_shadow"].iter().map(|k| r[k].as_u64().unwrap()).sum();
     assert_eq!(r["total"].as_u64().unwrap(), sum);
     assert_eq!(r["vpl_shadow"], 0);
     let plan: Vec<&str> = v["plan"].as_array().unwrap().iter().map(|p| p.as_str().unwrap()).collect();
@@ -59,11 +76,20 @@ fn stats_json_has_plan_rays_and_times() {
 #[test]
 fn plan_is_printed() {
     let d = out_dir("plan");
-    let (ok, _, err) = hyrt(&["render", "cornell", "--size", "32x32", "-o", d.join("c.png").to_str().unwrap()]);
+    let (ok, _, err) =
+        hyrt(&["render", "cornell", "--size", "32x32", "-o", d.join("c.png").to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(err.contains("run   specular") && err.contains("skip  indirect"), "{err}");
-    let (ok, _, err) =
-        hyrt(&["render", "cornell", "--size", "32x32", "--max-depth", "0", "-o", d.join("c.png").to_str().unwrap()]);
+    let (ok, _, err) = hyrt(&[
+        "render",
+        "cornell",
+        "--size",
+        "32x32",
+        "--max-depth",
+        "0",
+        "-o",
+        d.join("c.png").to_str().unwrap(),
+    ]);
     assert!(ok, "{err}");
     assert!(err.contains("skip  specular    max_depth = 0"), "{err}");
 }
@@ -166,15 +192,22 @@ fn bad_input_gives_clear_errors() {
     w("no_mesh.toml", &format!("{CAMERA}\n[[mesh]]\npath = \"nope.obj\"\n"));
     assert_fails(&d, &["no_mesh.toml"], &["no_mesh.toml", "nope.obj"]);
 
-    w("degenerate_camera.toml",
-        "[camera]\neye = [1.0, 2.0, 3.0]\ntarget = [1.0, 2.0, 3.0]\nfov_y = 40.0\n\n[[mesh]]\npath = \"tri.obj\"\n");
+    w(
+        "degenerate_camera.toml",
+        "[camera]\neye = [1.0, 2.0, 3.0]\ntarget = [1.0, 2.0, 3.0]\nfov_y = 40.0\n\n[[mesh]]\npath = \"tri.obj\"\n",
+    );
     assert_fails(&d, &["degenerate_camera.toml"], &["degenerate_camera.toml", "degenerate camera"]);
 
-    w("parallel_up.toml",
-        "[camera]\neye = [0.0, 5.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\n\n[[mesh]]\npath = \"tri.obj\"\n");
+    w(
+        "parallel_up.toml",
+        "[camera]\neye = [0.0, 5.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\n\n[[mesh]]\npath = \"tri.obj\"\n",
+    );
     assert_fails(&d, &["parallel_up.toml"], &["degenerate camera", "parallel"]);
 
-    w("zero_fov.toml", "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 0.0\n\n[[mesh]]\npath = \"tri.obj\"\n");
+    w(
+        "zero_fov.toml",
+        "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 0.0\n\n[[mesh]]\npath = \"tri.obj\"\n",
+    );
     assert_fails(&d, &["zero_fov.toml"], &["degenerate camera", "field of view"]);
 
     assert_fails(&d, &["cornell", "--size", "0x10"], &["image size 0x10 is empty"]);

@@ -103,7 +103,11 @@ fn same_image_for_one_and_two_threads() {
     s.settings.width = 96;
     s.settings.height = 96;
     let run = |n| {
-        rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(|| render(&s, Options::default()))
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+            .install(|| render(&s, Options::default()))
     };
     let (a, b) = (run(1), run(2));
     assert!(a.film.pixels == b.film.pixels, "pixels differ between 1 and 2 threads");

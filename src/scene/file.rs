@@ -1,11 +1,365 @@
 //! The TOML scene file format.
-use std::path::Path;
+//!
+//! A scene file places one or more mesh files (OBJ, gzipped OBJ, glTF, GLB), overrides
+//! materials, and adds a camera, point lights and render settings:
+//!
+//! ```toml
+//! name = "cornell-bunny-mirror"          # optional, default: the file name without extension
+//!
+//! [camera]                               # optional: without it the scene is framed automatically
+//! eye = [0.0, 1.0, 6.8]
+//! target = [0.0, 1.0, 0.0]               # exactly one of target / direction
+//! # direction = [-0.5607, -0.2336, 0.7944]
+//! up = [0.0, 1.0, 0.0]                   # optional, default +Y
+//! fov_y = 19.5                           # vertical field of view in degrees (required)
+//! # fov_x = 39.9                         # optional horizontal fov (Radiance-style views)
+//!
+//! [settings]                             # optional table; every key optional
+//! width = 640
+//! height = 480
+//! max_depth = 5                          # maximum number of mirror bounces
+//! exposure = 1.0
+//!
+//! [[mesh]]                               # one or more
+//! path = "../../shared/scenes/cornell-bunny-mirror/cornell-bunny-mirror.obj"   # relative to this file
+//! scale = 1.0                            # optional: number or [x, y, z]
+//! rotate = [0.0, 90.0, 0.0]              # optional: Euler angles in degrees (see below)
+//! translate = [0.0, 0.0, 0.0]            # optional
+//! exclude_materials = ["window_glass"]   # optional: drop triangles with these material names
+//!
+//! [[material]]                           # optional overrides, matched by material name
+//! name = "mirror"
+//! kd = [0.0, 0.0, 0.0]                   # optional
+//! ks = [1.0, 1.0, 1.0]                   # optional
+//!
+//! [[light]]                              # zero or more point lights
+//! position = [0.0, 1.9, -0.03]
+//! intensity = [0.6, 0.6, 0.6]            # W/sr, number or [r, g, b]
+//! ```
+//!
+//! Rules:
+//!
+//! - Unknown keys and tables are errors, as are missing required keys (`camera.eye`,
+//!   `camera.fov_y`, `mesh.path`, `material.name`, `light.position`, `light.intensity`) and a
+//!   file without any `[[mesh]]`. Integers are accepted wherever a number is expected.
+//! - `[camera]`: the viewing direction is `target - eye`, or `direction` as given (it need not
+//!   be normalised); giving both or neither is an error. Without a `[camera]` table the camera
+//!   looks at the centre of the scene's bounds from the front (+Z) and slightly above, with a
+//!   vertical fov of 45 degrees; a light at the camera is then added only if the file has no
+//!   `[[light]]`. With a `[camera]` and no `[[light]]`, the scene has no lights.
+//! - `[settings]`: defaults are width 640, height 480, max_depth 5, exposure 1.0.
+//! - `[[mesh]]`: `path` is relative to the scene file's directory (absolute paths work too).
+//!   Each mesh is transformed by `M = T * R * S`: first scaled (about the origin), then rotated,
+//!   then translated; normals use the inverse transpose of `M`, and a mirroring transform
+//!   (negative determinant) keeps triangles counter-clockwise. `rotate = [rx, ry, rz]` turns
+//!   about the fixed world axes, first X by `rx`, then Y by `ry`, then Z by `rz`:
+//!   `R = Rz(rz) * Ry(ry) * Rx(rx)` (glam's extrinsic `EulerRot::XYZEx`). Positive angles turn counter-clockwise
+//!   when looking down the axis towards the origin (right-handed). `exclude_materials` drops
+//!   every triangle whose material has one of the names (before the transform); a name that
+//!   no material of that mesh has is an error.
+//! - `[[material]]`: every material called `name`, in any mesh, gets `kd` (diffuse albedo)
+//!   and/or `ks` (mirror reflectance) set exactly as given; a name that matches no material is
+//!   an error. Overrides are applied in file order after all meshes are loaded.
+//! - `[[light]]`: an isotropic point light; a single number for `intensity` means grey.
+//!
+//! Errors name the scene file, with a line number where one is known (the TOML parser's
+//! messages include line and column); an error inside a mesh file names both files.
 
-use anyhow::Result;
+use std::collections::HashSet;
+use std::fmt;
+use std::path::{Path, PathBuf};
 
-use super::Scene;
+use anyhow::{Context, Result, anyhow, bail};
+use glam::{EulerRot, Mat4, Quat, Vec3};
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use toml::Spanned;
 
-/// Loads a `.toml` scene file; mesh paths are relative to the file.
+use super::obj::read_bytes;
+use super::{Camera, MeshData, PointLight, Scene, load_mesh};
+
+/// The whole file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    camera: Option<Spanned<CameraSpec>>,
+    settings: Option<SettingsSpec>,
+    #[serde(default)]
+    mesh: Vec<Spanned<MeshSpec>>,
+    #[serde(default)]
+    material: Vec<Spanned<MaterialSpec>>,
+    #[serde(default)]
+    light: Vec<LightSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    eye: V3,
+    target: Option<V3>,
+    direction: Option<V3>,
+    up: Option<V3>,
+    fov_y: f32,
+    fov_x: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SettingsSpec {
+    width: Option<u32>,
+    height: Option<u32>,
+    max_depth: Option<u32>,
+    exposure: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshSpec {
+    path: PathBuf,
+    scale: Option<Splat3>,
+    rotate: Option<V3>,
+    translate: Option<V3>,
+    #[serde(default)]
+    exclude_materials: Vec<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialSpec {
+    name: String,
+    kd: Option<V3>,
+    ks: Option<V3>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightSpec {
+    position: V3,
+    intensity: Splat3,
+}
+
+/// An `[x, y, z]` array of exactly three numbers. (serde's `[f32; 3]` would silently ignore
+/// extra elements with the toml deserializer.)
+#[derive(Clone, Copy, Default)]
+struct V3(Vec3);
+
+impl<'de> Deserialize<'de> for V3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = Vec::<f32>::deserialize(d)?;
+        match v[..] {
+            [x, y, z] => Ok(V3(Vec3::new(x, y, z))),
+            _ => Err(de::Error::invalid_length(v.len(), &"an array of three numbers")),
+        }
+    }
+}
+
+/// A number meaning `[v, v, v]`, or an `[x, y, z]` array.
+#[derive(Clone, Copy)]
+struct Splat3(Vec3);
+
+impl<'de> Deserialize<'de> for Splat3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        // A hand-written visitor rather than an untagged enum, whose error ("data did not match
+        // any variant") would not say what is expected.
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Splat3;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number or an array of three numbers")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Splat3, E> {
+                Ok(Splat3(Vec3::splat(v as f32)))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Splat3, E> {
+                Ok(Splat3(Vec3::splat(v as f32)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Splat3, E> {
+                Ok(Splat3(Vec3::splat(v as f32)))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> std::result::Result<Splat3, A::Error> {
+                let v = V3::deserialize(de::value::SeqAccessDeserializer::new(seq))?;
+                Ok(Splat3(v.0))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Loads a `.toml` scene file (format in the [module documentation](self)); mesh paths are
+/// relative to the file. The scene is not validated: the caller does that.
 pub fn load(path: &Path) -> Result<Scene> {
-    anyhow::bail!("{}: scene files not implemented yet", path.display())
+    let shown = path.display();
+    let bytes = read_bytes(path)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let line = line_of(e.as_bytes(), e.utf8_error().valid_up_to());
+        anyhow!("{shown}:{line}: the file is not valid UTF-8")
+    })?;
+    let file: SceneFile =
+        toml::from_str(&text).map_err(|e| anyhow!("{shown}: {}", e.to_string().trim_end()))?;
+    let at = |span: std::ops::Range<usize>| format!("{shown}:{}", line_of(text.as_bytes(), span.start));
+
+    if file.mesh.is_empty() {
+        bail!("{shown}: the scene has no [[mesh]] (at least one is required)");
+    }
+    let name = match file.name {
+        Some(n) => n,
+        None => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+    };
+    // The camera is checked before any (possibly slow) mesh is loaded.
+    let camera = match &file.camera {
+        Some(spec) => {
+            let c = spec.get_ref();
+            let eye = c.eye.0;
+            let forward = match (c.target, c.direction) {
+                (Some(t), None) => t.0 - eye,
+                (None, Some(d)) => d.0,
+                _ => bail!("{}: [camera] needs exactly one of 'target' and 'direction'", at(spec.span())),
+            };
+            let up = c.up.map_or(Vec3::Y, |u| u.0);
+            Some(Camera { eye, forward, up, fov_y_deg: c.fov_y, fov_x_deg: c.fov_x })
+        }
+        None => None,
+    };
+
+    let mut scene = Scene::new(&name);
+    scene.source = Some(path.to_path_buf());
+    let dir = path.parent().unwrap_or(Path::new(""));
+
+    for spec in &file.mesh {
+        let m = spec.get_ref();
+        let mesh_path = dir.join(&m.path);
+        let mut mesh =
+            load_mesh(&mesh_path).with_context(|| format!("{shown}: mesh {}", m.path.display()))?;
+        if !m.exclude_materials.is_empty() {
+            mesh = exclude(mesh, &m.exclude_materials)
+                .map_err(|e| anyhow!("{}: mesh {}: {e}", at(spec.span()), m.path.display()))?;
+        }
+        let scale = m.scale.map_or(Vec3::ONE, |s| s.0);
+        let [rx, ry, rz] = m.rotate.unwrap_or_default().0.to_array().map(f32::to_radians);
+        let rotation = Quat::from_euler(EulerRot::XYZEx, rx, ry, rz);
+        let translation = m.translate.unwrap_or_default().0;
+        let transform = Mat4::from_scale_rotation_translation(scale, rotation, translation);
+        // A zero scale would make the normal matrix infinite (zero normals after normalising).
+        if !transform.is_finite() || transform.determinant() == 0.0 {
+            bail!(
+                "{}: mesh {}: scale, rotate and translate must be finite numbers and scale non-zero",
+                at(spec.span()),
+                m.path.display()
+            );
+        }
+        if transform != Mat4::IDENTITY {
+            mesh.transform(transform);
+            // A mirroring transform turns counter-clockwise triangles clockwise; swap two
+            // corners so face orientation survives.
+            if transform.determinant() < 0.0 {
+                for t in &mut mesh.positions {
+                    t.swap(1, 2);
+                }
+                for n in mesh.normals.iter_mut().flatten() {
+                    n.swap(1, 2);
+                }
+            }
+        }
+        scene.add_mesh(mesh);
+    }
+
+    for spec in &file.material {
+        let o = spec.get_ref();
+        let mut found = false;
+        for m in scene.materials.iter_mut().filter(|m| m.name == o.name) {
+            found = true;
+            if let Some(kd) = o.kd {
+                m.kd = kd.0;
+            }
+            if let Some(ks) = o.ks {
+                m.ks = ks.0;
+            }
+        }
+        if !found {
+            bail!(
+                "{}: [[material]] '{}' matches no material in the scene (materials: {})",
+                at(spec.span()),
+                o.name,
+                name_list(scene.materials.iter().map(|m| m.name.as_str()))
+            );
+        }
+    }
+
+    scene.lights =
+        file.light.iter().map(|l| PointLight { position: l.position.0, intensity: l.intensity.0 }).collect();
+
+    if let Some(s) = &file.settings {
+        let d = &mut scene.settings;
+        d.width = s.width.unwrap_or(d.width);
+        d.height = s.height.unwrap_or(d.height);
+        d.max_depth = s.max_depth.unwrap_or(d.max_depth);
+        d.exposure = s.exposure.unwrap_or(d.exposure);
+    }
+
+    match camera {
+        Some(c) => scene.camera = Some(c),
+        None => scene.frame_automatically(),
+    }
+    Ok(scene)
+}
+
+/// Drops the triangles whose material is named in `names`, keeping ranges consistent (empty
+/// ranges disappear). Every name must belong to one of the mesh's materials.
+fn exclude(mut mesh: MeshData, names: &[String]) -> Result<MeshData> {
+    let known: HashSet<&str> = mesh.materials.iter().map(|m| m.name.as_str()).collect();
+    if let Some(missing) = names.iter().find(|n| !known.contains(n.as_str())) {
+        bail!(
+            "exclude_materials: no material named '{missing}' (materials: {})",
+            name_list(mesh.materials.iter().map(|m| m.name.as_str()))
+        );
+    }
+    let names: HashSet<&str> = names.iter().map(String::as_str).collect();
+    let dropped: Vec<bool> = mesh.materials.iter().map(|m| names.contains(m.name.as_str())).collect();
+    let keep: Vec<bool> =
+        mesh.material.iter().map(|&m| !dropped.get(m as usize).copied().unwrap_or(false)).collect();
+
+    // kept_before[i] = number of kept triangles before triangle i, to remap range starts.
+    let mut kept_before = Vec::with_capacity(keep.len() + 1);
+    let mut n = 0u32;
+    kept_before.push(0);
+    for &k in &keep {
+        n += u32::from(k);
+        kept_before.push(n);
+    }
+    let remap = |i: u32| kept_before.get(i as usize).copied().unwrap_or(n);
+    mesh.ranges = mesh
+        .ranges
+        .iter()
+        .map(|r| {
+            let first = remap(r.first);
+            let end = remap(r.first.saturating_add(r.count));
+            super::MeshRange { name: r.name.clone(), first, count: end - first }
+        })
+        .filter(|r| r.count > 0)
+        .collect();
+
+    let mut it = keep.iter();
+    mesh.positions.retain(|_| it.next().copied().unwrap_or(true));
+    let mut it = keep.iter();
+    mesh.normals.retain(|_| it.next().copied().unwrap_or(true));
+    let mut it = keep.iter();
+    mesh.material.retain(|_| it.next().copied().unwrap_or(true));
+    Ok(mesh)
+}
+
+/// Up to 12 distinct names, comma-separated, for "did you mean" style messages.
+fn name_list<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let mut seen = HashSet::new();
+    let unique: Vec<&str> = names.filter(|n| seen.insert(*n)).collect();
+    let mut s = unique.iter().take(12).map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ");
+    if unique.len() > 12 {
+        s.push_str(&format!(", ... ({} in all)", unique.len()));
+    }
+    if s.is_empty() { "none".to_string() } else { s }
+}
+
+/// 1-based line number of a byte offset.
+fn line_of(text: &[u8], offset: usize) -> usize {
+    text.iter().take(offset).filter(|&&b| b == b'\n').count() + 1
 }

@@ -226,10 +226,7 @@ impl Scene {
         if self.lights.is_empty() {
             let pos = eye + Vec3::Y * radius * 0.5;
             let d2 = (pos - centre).length_squared();
-            self.lights.push(PointLight {
-                position: pos,
-                intensity: Vec3::splat(std::f32::consts::PI * d2),
-            });
+            self.lights.push(PointLight { position: pos, intensity: Vec3::splat(std::f32::consts::PI * d2) });
         }
     }
 
@@ -239,16 +236,14 @@ impl Scene {
         if self.positions.is_empty() {
             bail!("{origin}: the scene has no triangles");
         }
-        if let Some((i, _)) = self
-            .positions
-            .iter()
-            .enumerate()
-            .find(|(_, t)| !t.iter().all(|p| p.is_finite()))
+        if let Some((i, _)) =
+            self.positions.iter().enumerate().find(|(_, t)| !t.iter().all(|p| p.is_finite()))
         {
             let mesh = self.mesh_of(i as u32).map(|m| format!(" (mesh '{}')", m.name)).unwrap_or_default();
             bail!("{origin}: triangle {i}{mesh} has a NaN or infinite vertex coordinate");
         }
-        if let Some((i, _)) = self.normals.iter().enumerate().find(|(_, t)| !t.iter().all(|n| n.is_finite())) {
+        if let Some((i, _)) = self.normals.iter().enumerate().find(|(_, t)| !t.iter().all(|n| n.is_finite()))
+        {
             bail!("{origin}: triangle {i} has a NaN or infinite normal");
         }
         for (i, l) in self.lights.iter().enumerate() {
@@ -325,9 +320,8 @@ pub fn load(spec: &str) -> Result<Scene> {
         if lower.ends_with(".toml") {
             file::load(path)?
         } else if ["obj", "obj.gz", "gltf", "glb"].iter().any(|e| lower.ends_with(&format!(".{e}"))) {
-            let mut scene = Scene::new(
-                &path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
-            );
+            let mut scene =
+                Scene::new(&path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
             scene.source = Some(path.to_path_buf());
             scene.add_mesh(load_mesh(path)?);
             scene.frame_automatically();

@@ -34,7 +34,15 @@ pub fn render(scene: &Scene, options: Options) -> Frame {
 
 /// A square of half-size `half` in the plane y = 0 centred at the origin, diffuse `kd`,
 /// seen by a camera straight above at height `cam_h`, with the given lights.
-pub fn floor_scene(half: f32, kd: Vec3, cam_h: f32, fov: f32, lights: Vec<PointLight>, w: u32, h: u32) -> Scene {
+pub fn floor_scene(
+    half: f32,
+    kd: Vec3,
+    cam_h: f32,
+    fov: f32,
+    lights: Vec<PointLight>,
+    w: u32,
+    h: u32,
+) -> Scene {
     let mut s = Scene::new("floor");
     let m = s.add_material(Material::diffuse("floor", kd));
     s.push_quad(
@@ -42,7 +50,13 @@ pub fn floor_scene(half: f32, kd: Vec3, cam_h: f32, fov: f32, lights: Vec<PointL
         m,
     );
     s.lights = lights;
-    s.camera = Some(Camera { eye: vec3(0.0, cam_h, 0.0), forward: -Vec3::Y, up: -Vec3::Z, fov_y_deg: fov, fov_x_deg: None });
+    s.camera = Some(Camera {
+        eye: vec3(0.0, cam_h, 0.0),
+        forward: -Vec3::Y,
+        up: -Vec3::Z,
+        fov_y_deg: fov,
+        fov_x_deg: None,
+    });
     s.settings = Settings { width: w, height: h, max_depth: 5, exposure: 1.0 };
     s.validate().expect("valid test scene");
     s
@@ -59,5 +73,9 @@ pub fn hyrt_in(dir: &Path, args: &[&str]) -> (bool, String, String) {
         .current_dir(dir)
         .output()
         .expect("run hyrt");
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }

@@ -84,11 +84,8 @@ impl Tracer {
     /// below anything that floating-point coordinates can distinguish.
     pub fn build(tris: &[[Vec3; 3]]) -> Self {
         let start = std::time::Instant::now();
-        let max_abs = tris
-            .iter()
-            .flatten()
-            .filter(|p| p.is_finite())
-            .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        let max_abs =
+            tris.iter().flatten().filter(|p| p.is_finite()).fold(0.0f32, |m, p| m.max(p.abs().max_element()));
         let scale = if max_abs > 0.0 {
             let e = max_abs.log2().floor() as i32;
             2f32.powi((19 - e).clamp(-120, 120))
@@ -190,7 +187,8 @@ impl Tracer {
     pub fn hits_triangle(&self, tri: u32, ray: &Ray) -> Option<Hit> {
         let t = self.original.get(tri as usize)?;
         let (ob, pre) = self.scaled(ray);
-        let v = [Vec3A::from(t[0] * self.scale), Vec3A::from(t[1] * self.scale), Vec3A::from(t[2] * self.scale)];
+        let v =
+            [Vec3A::from(t[0] * self.scale), Vec3A::from(t[1] * self.scale), Vec3A::from(t[2] * self.scale)];
         intersect_triangle(&pre, &v, ob.tmax).map(|h| Hit { t: h.t / self.scale, tri, bary: h.bary })
     }
 }

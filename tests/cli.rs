@@ -215,3 +215,23 @@ fn bad_input_gives_clear_errors() {
     assert_fails(&d, &["cornell", "--threads", "0"], &["threads"]);
     assert_fails(&d, &["cornell", "--exr", "no/such/dir/x.exr"], &["no/such/dir/x.exr", "does not exist"]);
 }
+
+/// A bare mesh file gets an automatic camera and light that frame it: the object fills a
+/// good part of the image and is lit.
+#[test]
+fn bare_mesh_files_are_framed_and_lit() {
+    let d = out_dir("bare_mesh");
+    for (name, mesh) in [
+        ("duck", "gltf-samples/Duck/glTF-Binary/Duck.glb"),
+        ("office", "radiance-office/office.obj"),
+    ] {
+        let png = d.join(format!("{name}.png"));
+        let path = shared_scene(mesh);
+        let (ok, _, err) =
+            hyrt(&["render", path.to_str().unwrap(), "--size", "64x48", "-q", "-o", png.to_str().unwrap()]);
+        assert!(ok, "{name}: {err}");
+        let img = hyrt::metrics::read_display_image(&png).unwrap();
+        let lit = img.pixels.iter().filter(|p| p.max_element() > 0.05).count();
+        assert!(lit > img.pixels.len() / 10, "{name}: only {lit} of {} pixels lit", img.pixels.len());
+    }
+}

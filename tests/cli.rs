@@ -221,10 +221,9 @@ fn bad_input_gives_clear_errors() {
 #[test]
 fn bare_mesh_files_are_framed_and_lit() {
     let d = out_dir("bare_mesh");
-    for (name, mesh) in [
-        ("duck", "gltf-samples/Duck/glTF-Binary/Duck.glb"),
-        ("office", "radiance-office/office.obj"),
-    ] {
+    for (name, mesh) in
+        [("duck", "gltf-samples/Duck/glTF-Binary/Duck.glb"), ("office", "radiance-office/office.obj")]
+    {
         let png = d.join(format!("{name}.png"));
         let path = shared_scene(mesh);
         let (ok, _, err) =

@@ -5,19 +5,11 @@ use std::f32::consts::FRAC_1_PI;
 use glam::Vec3;
 use hyrt_tracer::{RayCounts, RayKind, spawn_ray_to};
 
-use super::{Progress, Renderer, Shadows, SurfaceHit, par_rows};
+use super::{Progress, Renderer, Shadows, SurfaceHit, shade_hits};
 
 /// Shades every camera hit of the G-buffer with direct light.
 pub fn run(r: &Renderer, gbuffer: &[Option<SurfaceHit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
-    let w = r.scene.settings.width as usize;
-    par_rows(out, w, progress, |y, row, c| {
-        let base = y as usize * w;
-        for (x, px) in row.iter_mut().enumerate() {
-            if let Some(hit) = &gbuffer[base + x] {
-                *px = shade(r, hit, c);
-            }
-        }
-    })
+    shade_hits(r, gbuffer, out, progress, |hit, c| shade(r, hit, c))
 }
 
 /// Diffuse direct light at `hit`: `L = Kd / pi * sum_lights I * cos(theta) / r^2` over the

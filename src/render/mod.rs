@@ -176,3 +176,23 @@ pub(crate) fn par_rows<T: Send>(
         .into_iter()
         .sum()
 }
+
+/// Runs `shade` on every pixel of `gbuffer` that has a hit, writing its result to `out`
+/// (pixels without a hit keep their value), in parallel rows as [`par_rows`].
+pub(crate) fn shade_hits(
+    r: &Renderer,
+    gbuffer: &[Option<SurfaceHit>],
+    out: &mut [Vec3],
+    progress: Progress,
+    shade: impl Fn(&SurfaceHit, &mut RayCounts) -> Vec3 + Sync,
+) -> RayCounts {
+    let w = r.scene.settings.width as usize;
+    par_rows(out, w, progress, |y, row, c| {
+        let hits = &gbuffer[y as usize * w..][..row.len()];
+        for (px, hit) in row.iter_mut().zip(hits) {
+            if let Some(hit) = hit {
+                *px = shade(hit, c);
+            }
+        }
+    })
+}

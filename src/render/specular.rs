@@ -3,19 +3,11 @@
 use glam::Vec3;
 use hyrt_tracer::{RayCounts, RayKind, spawn_ray};
 
-use super::{Progress, Renderer, SurfaceHit, direct, par_rows};
+use super::{Progress, Renderer, SurfaceHit, direct, shade_hits};
 
 /// Adds the mirror-reflected light of every camera hit on a specular material.
 pub fn run(r: &Renderer, gbuffer: &[Option<SurfaceHit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
-    let w = r.scene.settings.width as usize;
-    par_rows(out, w, progress, |y, row, c| {
-        let base = y as usize * w;
-        for (x, px) in row.iter_mut().enumerate() {
-            if let Some(hit) = &gbuffer[base + x] {
-                *px = reflected(r, hit, c);
-            }
-        }
-    })
+    shade_hits(r, gbuffer, out, progress, |hit, c| reflected(r, hit, c))
 }
 
 /// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces;

@@ -89,3 +89,46 @@ fn nearer_triangle_wins_whatever_the_id_and_order() {
         }
     }
 }
+
+/// A full-screen quad at view depth `d` (x, y spanning NDC [-1.5, 1.5]), with clip z chosen by
+/// the depth convention: standard `z = f/(f-n) (w - n)` or reversed `z = n`.
+fn quad_at(d: f32, n: f32, f: f32, reversed: bool) -> [[Vec4; 3]; 2] {
+    let z = if reversed { n } else { f / (f - n) * (d - n) };
+    let v = |x: f32, y: f32| Vec4::new(x * d, y * d, z, d);
+    [[v(-1.5, -1.5), v(1.5, -1.5), v(1.5, 1.5)], [v(-1.5, -1.5), v(1.5, 1.5), v(-1.5, 1.5)]]
+}
+
+/// Two parallel surfaces 1e-4 apart (relative) at 5e4 near-plane distances: standard z/w
+/// cannot tell them apart (the tie goes to the smaller id, the farther surface here), while
+/// reversed-Z resolves them everywhere.
+#[test]
+fn reversed_z_resolves_surfaces_that_standard_depth_cannot() {
+    let (n, f) = (0.01f32, 1000.0f32);
+    let (near_d, far_d) = (500.0f32, 500.05f32);
+    let run = |reversed: bool| {
+        let mut tris = Vec::new();
+        let mut ids = Vec::new();
+        for (d, id) in [(far_d, 1u32), (near_d, 2u32)] {
+            for t in quad_at(d, n, f, reversed) {
+                tris.push(t);
+                ids.push(id);
+            }
+        }
+        let opts = RasterOptions { reversed_z: reversed, ..Default::default() };
+        rasterize(&tris, &ids, W, H, &opts)
+    };
+    let rev = run(true);
+    assert!(rev.id.iter().all(|&id| id == 2), "reversed-Z: the nearer surface must win everywhere");
+    assert!(rev.depth.iter().all(|&d| (d - n / near_d).abs() <= 1e-6 * d), "reversed depth is n/w");
+    let std = run(false);
+    let wrong = std.id.iter().filter(|&&id| id != 2).count();
+    assert!(wrong > 0, "standard depth was expected to fail here (the test would prove nothing)");
+}
+
+#[test]
+fn reversed_z_empty_pixels_hold_zero() {
+    let opts = RasterOptions { reversed_z: true, ..Default::default() };
+    let t = rasterize(&[], &[], 4, 3, &opts);
+    assert!(t.depth.iter().all(|&d| d == hyrt_raster::EMPTY_DEPTH_REVERSED));
+    assert!(t.id.iter().all(|&i| i == EMPTY_ID));
+}

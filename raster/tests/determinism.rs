@@ -57,7 +57,7 @@ fn identical_for_any_tile_size() {
     let (cam, tris, ids) = scene();
     let reference = bits(&rasterize(&tris, &ids, cam.width, cam.height, &RasterOptions::default()));
     for tile_size in [8, 16, 40, 128, 4096] {
-        let opts = RasterOptions { tile_size, cull_backfaces: false };
+        let opts = RasterOptions { tile_size, cull_backfaces: false, reversed_z: false };
         assert!(
             bits(&rasterize(&tris, &ids, cam.width, cam.height, &opts)) == reference,
             "tile size {tile_size}"

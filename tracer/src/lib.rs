@@ -26,7 +26,7 @@ use obvhs::{
 
 pub use counts::{RayCounts, RayKind};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
-pub use triangle::{RayPrecomp, TriHit, intersect_triangle};
+pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle};
 
 /// A ray with a normalised direction; hits are accepted for `0 < t < tmax`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -185,10 +185,26 @@ impl Tracer {
     /// Tests a single triangle by original id (the occluder hint of a shadow map texel):
     /// no traversal. Not counted as a ray; callers count hint tests themselves.
     pub fn hits_triangle(&self, tri: u32, ray: &Ray) -> Option<Hit> {
+        self.on_triangle::<true>(tri, ray)
+    }
+
+    /// Where `ray` meets the plane of triangle `tri` (original id), with barycentrics that
+    /// may be negative; bit-identical to [`Tracer::hits_triangle`] where that hits. `None` for
+    /// a ray parallel to the plane, a hit behind the origin or beyond `tmax`, or an unknown id.
+    /// Not counted as a ray: no traversal.
+    pub fn hit_on_plane(&self, tri: u32, ray: &Ray) -> Option<Hit> {
+        self.on_triangle::<false>(tri, ray)
+    }
+
+    fn on_triangle<const INSIDE: bool>(&self, tri: u32, ray: &Ray) -> Option<Hit> {
         let t = self.original.get(tri as usize)?;
+        if !ray.origin.is_finite() || !ray.dir.is_finite() {
+            return None;
+        }
         let (ob, pre) = self.scaled(ray);
-        let v =
-            [Vec3A::from(t[0] * self.scale), Vec3A::from(t[1] * self.scale), Vec3A::from(t[2] * self.scale)];
-        intersect_triangle(&pre, &v, ob.tmax).map(|h| Hit { t: h.t / self.scale, tri, bary: h.bary })
+        let v = t.map(|p| Vec3A::from(p * self.scale));
+        let h =
+            if INSIDE { intersect_triangle(&pre, &v, ob.tmax) } else { intersect_plane(&pre, &v, ob.tmax) };
+        h.map(|h| Hit { t: h.t / self.scale, tri, bary: h.bary })
     }
 }

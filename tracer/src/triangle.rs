@@ -62,6 +62,21 @@ pub struct TriHit {
 /// the determinant, the sum of the three edge values, is zero for them.
 #[inline]
 pub fn intersect_triangle(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<TriHit> {
+    intersect::<true>(r, v, tmax)
+}
+
+/// Intersects the triangle's *plane*: the same arithmetic as [`intersect_triangle`] without
+/// the inside test, so the barycentrics may be negative (the point lies outside the triangle)
+/// and, where the ray does pass inside, the result is bit-identical to [`intersect_triangle`].
+/// Used to reconstruct hit points for rasterized pixels, whose coverage rule may differ from
+/// the ray test by a fraction of a pixel along edges.
+#[inline]
+pub fn intersect_plane(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<TriHit> {
+    intersect::<false>(r, v, tmax)
+}
+
+#[inline(always)]
+fn intersect<const INSIDE: bool>(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<TriHit> {
     // Translate to the ray origin and permute.
     let p = |q: Vec3A| {
         let a = (q - r.origin).to_array();
@@ -84,7 +99,7 @@ pub fn intersect_triangle(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<T
         e1 = d(p2[0], p0[1], p2[1], p0[0]);
         e2 = d(p0[0], p1[1], p0[1], p1[0]);
     }
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+    if INSIDE && (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
         return None;
     }
     let det = e0 + e1 + e2;

@@ -188,3 +188,27 @@ fn counts_add_up_by_kind() {
     let s: RayCounts = [a, b].into_iter().sum();
     assert_eq!((s.primary, s.shadow, s.specular, s.vpl_shadow, s.total()), (3, 5, 7, 11, 26));
 }
+
+#[test]
+fn plane_hit_equals_triangle_hit_inside_and_extends_outside() {
+    let tri = [vec3(0.0, 0.0, -3.0), vec3(2.0, 0.0, -3.5), vec3(0.0, 2.0, -2.5)];
+    let tracer = Tracer::build(&[tri]);
+    // Inside: bit-identical to the triangle test.
+    let ray = Ray::new(vec3(0.4, 0.3, 1.0), vec3(0.05, -0.02, -1.0).normalize(), f32::INFINITY);
+    assert_eq!(tracer.hit_on_plane(0, &ray), tracer.hits_triangle(0, &ray));
+    assert!(tracer.hits_triangle(0, &ray).is_some());
+    // Outside the triangle but on its plane: a hit with a negative barycentric whose point
+    // lies on the plane.
+    let ray = Ray::new(vec3(2.0, 2.0, 1.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
+    assert!(tracer.hits_triangle(0, &ray).is_none());
+    let h = tracer.hit_on_plane(0, &ray).unwrap();
+    assert!(h.bary.iter().any(|&b| b < 0.0));
+    let p = ray.origin + ray.dir * h.t;
+    let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+    assert!((p - tri[0]).dot(n).abs() < 1e-5, "{p} is off the plane");
+    // Parallel and backwards rays find nothing.
+    let parallel = Ray::new(vec3(0.0, 0.0, 5.0), (tri[1] - tri[0]).normalize(), f32::INFINITY);
+    assert!(tracer.hit_on_plane(0, &parallel).is_none());
+    let away = Ray::new(vec3(0.4, 0.3, 1.0), vec3(0.0, 0.0, 1.0), f32::INFINITY);
+    assert!(tracer.hit_on_plane(0, &away).is_none());
+}

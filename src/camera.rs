@@ -39,8 +39,15 @@ impl CameraRays {
     /// Unnormalised direction through the centre of pixel `(x, y)`.
     #[inline]
     pub fn direction(&self, x: u32, y: u32) -> Vec3 {
-        let sx = (2.0 * (x as f32 + 0.5) / self.width as f32 - 1.0) * self.tan_x;
-        let sy = (1.0 - 2.0 * (y as f32 + 0.5) / self.height as f32) * self.tan_y;
+        self.direction_at(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// Unnormalised direction through the film point `(fx, fy)` in pixel units (`(0, 0)` is
+    /// the top-left corner of the image, `(x + 0.5, y + 0.5)` the centre of pixel `(x, y)`).
+    #[inline]
+    pub fn direction_at(&self, fx: f32, fy: f32) -> Vec3 {
+        let sx = (2.0 * fx / self.width as f32 - 1.0) * self.tan_x;
+        let sy = (1.0 - 2.0 * fy / self.height as f32) * self.tan_y;
         self.forward + self.right * sx + self.up * sy
     }
 }

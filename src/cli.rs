@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use crate::{
     film::atomic_write,
     metrics,
-    render::{Options, Renderer},
+    render::{Options, Renderer, Visibility},
     scene,
     stats::RenderStats,
 };
@@ -59,9 +59,29 @@ pub struct RenderArgs {
     /// Exposure (linear scale) for the PNG, overriding the scene's.
     #[arg(long, value_name = "E")]
     pub exposure: Option<f32>,
+    /// Primary visibility: `rays` (one primary ray per pixel, the reference) or `raster`
+    /// (z-buffer; no primary rays).
+    #[arg(long, value_enum, default_value_t = VisibilityArg::Rays)]
+    pub visibility: VisibilityArg,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `--visibility` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum VisibilityArg {
+    Rays,
+    Raster,
+}
+
+impl From<VisibilityArg> for Visibility {
+    fn from(v: VisibilityArg) -> Self {
+        match v {
+            VisibilityArg::Rays => Visibility::Rays,
+            VisibilityArg::Raster => Visibility::Raster,
+        }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -125,7 +145,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         check_writable(p)?;
     }
 
-    let options = Options::default();
+    let options = Options { visibility: a.visibility.into(), ..Options::default() };
     let renderer = Renderer::new(&scene, options);
     say(format!(
         "{}: {} triangles, {} lights, {}x{}, {} threads; BVH {:.1} ms\nplan:\n{}",

@@ -5,7 +5,10 @@
 
 use serde::Serialize;
 
-use crate::{render::Options, scene::Scene};
+use crate::{
+    render::{Options, Visibility},
+    scene::Scene,
+};
 
 /// A pass of the frame, run or skipped, with the reason.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
@@ -27,7 +30,15 @@ impl Plan {
         let mut plan = Plan::default();
         let tris = scene.triangle_count();
         plan.add(true, "bvh_build", format!("ray casting needs a BVH over {tris} triangles"));
-        plan.add(true, "visibility", format!("{}: one primary ray per pixel", opts.visibility.name()));
+        let vis = match opts.visibility {
+            Visibility::Rays => "rays: one primary ray per pixel".to_string(),
+            Visibility::Raster => {
+                format!(
+                    "raster: z-buffer of {tris} triangles, hit points on the visible triangle (no primary rays)"
+                )
+            }
+        };
+        plan.add(true, "visibility", vis);
 
         let lights = scene.lights.len();
         if lights == 0 {

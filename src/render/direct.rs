@@ -3,12 +3,12 @@
 use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
-use hyrt_tracer::{RayCounts, RayKind, spawn_ray_to};
+use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
 use super::{Progress, Renderer, Shadows, SurfaceHit, shade_hits};
 
 /// Shades every camera hit of the G-buffer with direct light.
-pub fn run(r: &Renderer, gbuffer: &[Option<SurfaceHit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
+pub fn run(r: &Renderer, gbuffer: &[Option<Hit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
     shade_hits(r, gbuffer, out, progress, |hit, c| shade(r, hit, c))
 }
 

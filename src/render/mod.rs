@@ -3,7 +3,8 @@
 //! A frame is a short sequence of passes over named, screen-sized buffers:
 //!
 //! ```text
-//! visibility  -> gbuffer: Vec<Option<SurfaceHit>>      (Visibility::Rays: primary rays)
+//! visibility  -> gbuffer: Vec<Option<Hit>>             (Visibility::Rays: primary rays,
+//!                                                       Visibility::Raster: z-buffer)
 //! direct      -> direct:  Vec<Vec3>                    (Shadows::Rays: one shadow ray per light)
 //! specular    -> specular: Vec<Vec3>                   (mirror paths, their hits shaded as above)
 //! compose     -> Film = direct + specular
@@ -20,7 +21,7 @@ pub mod visibility;
 use std::{collections::BTreeMap, time::Instant};
 
 use glam::Vec3;
-use hyrt_tracer::{RayCounts, Tracer};
+use hyrt_tracer::{Hit, Ray, RayCounts, Tracer};
 use rayon::prelude::*;
 
 pub use surface::SurfaceHit;
@@ -33,6 +34,8 @@ pub enum Visibility {
     /// One primary ray through each pixel centre.
     #[default]
     Rays,
+    /// A z-buffer pass; hit points on the visible triangle's plane (no primary rays).
+    Raster,
 }
 
 /// How point-light visibility is decided.
@@ -54,6 +57,7 @@ impl Visibility {
     pub fn name(self) -> &'static str {
         match self {
             Visibility::Rays => "rays",
+            Visibility::Raster => "raster",
         }
     }
 }
@@ -120,6 +124,19 @@ impl<'a> Renderer<'a> {
         ["visibility", "direct", "specular"].iter().filter(|p| self.plan.runs(p)).count() as u32
     }
 
+    /// The camera ray through the centre of pixel `(x, y)`.
+    #[inline]
+    pub fn camera_ray(&self, x: u32, y: u32) -> Ray {
+        Ray::new(self.camera.eye, self.camera.direction(x, y).normalize(), f32::INFINITY)
+    }
+
+    /// Runs only the visibility pass (for tests and benchmarks): the G-buffer and its stats.
+    pub fn visibility(&self) -> (Vec<Option<Hit>>, FrameStats) {
+        let mut stats = FrameStats::default();
+        let g = visibility::run(self, &|| {}, &mut stats);
+        (g, stats)
+    }
+
     /// Renders one frame.
     pub fn render(&self, progress: Progress) -> Frame {
         let start = Instant::now();
@@ -128,7 +145,7 @@ impl<'a> Renderer<'a> {
         let n = w as usize * h as usize;
 
         let t = Instant::now();
-        let gbuffer = visibility::run(self, progress, &mut stats.rays);
+        let gbuffer = visibility::run(self, progress, &mut stats);
         stats.time_ms.insert("visibility", ms(t));
 
         let mut direct = vec![Vec3::ZERO; n];
@@ -152,7 +169,7 @@ impl<'a> Renderer<'a> {
     }
 }
 
-fn ms(t: Instant) -> f64 {
+pub(crate) fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
@@ -177,11 +194,11 @@ pub(crate) fn par_rows<T: Send>(
         .sum()
 }
 
-/// Runs `shade` on every pixel of `gbuffer` that has a hit, writing its result to `out`
-/// (pixels without a hit keep their value), in parallel rows as [`par_rows`].
+/// Runs `shade` on the shading point of every pixel of `gbuffer` that has a hit, writing its
+/// result to `out` (pixels without a hit keep their value), in parallel rows as [`par_rows`].
 pub(crate) fn shade_hits(
     r: &Renderer,
-    gbuffer: &[Option<SurfaceHit>],
+    gbuffer: &[Option<Hit>],
     out: &mut [Vec3],
     progress: Progress,
     shade: impl Fn(&SurfaceHit, &mut RayCounts) -> Vec3 + Sync,
@@ -189,9 +206,10 @@ pub(crate) fn shade_hits(
     let w = r.scene.settings.width as usize;
     par_rows(out, w, progress, |y, row, c| {
         let hits = &gbuffer[y as usize * w..][..row.len()];
-        for (px, hit) in row.iter_mut().zip(hits) {
+        for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
             if let Some(hit) = hit {
-                *px = shade(hit, c);
+                let dir = r.camera_ray(x as u32, y).dir;
+                *px = shade(&SurfaceHit::new(r.scene, hit, dir), c);
             }
         }
     })

@@ -1,12 +1,12 @@
 //! Whitted mirror reflection: paths of perfect reflections from camera hits.
 
 use glam::Vec3;
-use hyrt_tracer::{RayCounts, RayKind, spawn_ray};
+use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray};
 
 use super::{Progress, Renderer, SurfaceHit, direct, shade_hits};
 
 /// Adds the mirror-reflected light of every camera hit on a specular material.
-pub fn run(r: &Renderer, gbuffer: &[Option<SurfaceHit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
+pub fn run(r: &Renderer, gbuffer: &[Option<Hit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
     shade_hits(r, gbuffer, out, progress, |hit, c| reflected(r, hit, c))
 }
 

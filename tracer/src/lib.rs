@@ -28,6 +28,25 @@ pub use counts::{RayCounts, RayKind};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
 pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle};
 
+/// Relative distance within which two hits count as a depth tie, decided for the smaller
+/// triangle id: `2^-16`, 15 micrometres per metre.
+///
+/// Why a tolerance: coplanar duplicates (a desk top modelled twice, decals) are hit at
+/// distances that differ only by rounding, so "the nearer" is noise, a speckle that differs
+/// between ray casting and rasterization and between neighbouring pixels. Within this window
+/// the smaller id wins, in the tracer and in the rasterized G-buffer alike. The window is 128
+/// times the f32 unit roundoff: above the few-ulp error of the watertight test's `t` and of an
+/// exactly interpolated depth, and far below any gap between surfaces meant to be distinct.
+/// Ties are decided pairwise as candidates arrive (in the BVH's fixed order), so the result
+/// is deterministic.
+pub const DEPTH_TIE: f32 = 1.0 / 65536.0;
+
+/// True when distances `a` and `b` are a depth tie (see [`DEPTH_TIE`]).
+#[inline]
+pub fn depth_tie(a: f32, b: f32) -> bool {
+    (a - b).abs() <= DEPTH_TIE * a.max(b)
+}
+
 /// A ray with a normalised direction; hits are accepted for `0 < t < tmax`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
@@ -142,7 +161,8 @@ impl Tracer {
         (ObRay::new(o, d, 0.0, tmax), RayPrecomp::new(o, d))
     }
 
-    /// The nearest hit with `0 < t < ray.tmax`; ties go to the smaller triangle id.
+    /// The nearest hit with `0 < t < ray.tmax`; hits within [`DEPTH_TIE`] of each other go to
+    /// the smaller triangle id.
     pub fn closest_hit(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> Option<Hit> {
         counts.add(kind, 1);
         if self.bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
@@ -157,15 +177,21 @@ impl Tracer {
             let id = self.ids[i];
             let better = match best {
                 None => true,
-                Some((bt, bid, _)) => h.t < bt || (h.t == bt && id < bid),
+                Some((bt, bid, _)) => {
+                    if depth_tie(h.t, bt) {
+                        id < bid
+                    } else {
+                        h.t < bt
+                    }
+                }
             };
             if better {
                 best = Some((h.t, id, h.bary));
             }
             // obvhs shrinks tmax to the value returned and stops visiting nodes beyond it.
-            // Returning the next float above the best t keeps nodes that touch exactly that
-            // distance alive, so an equally distant triangle with a smaller id is still seen.
-            best.map_or(f32::INFINITY, |(bt, _, _)| bt.next_up())
+            // Returning the far end of the tie window keeps every node that could still hold
+            // a tied triangle with a smaller id alive.
+            best.map_or(f32::INFINITY, |(bt, _, _)| (bt * (1.0 + DEPTH_TIE)).next_up())
         });
         best.map(|(t, tri, bary)| Hit { t: t / self.scale, tri, bary })
     }

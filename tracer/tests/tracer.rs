@@ -212,3 +212,19 @@ fn plane_hit_equals_triangle_hit_inside_and_extends_outside() {
     let away = Ray::new(vec3(0.4, 0.3, 1.0), vec3(0.0, 0.0, 1.0), f32::INFINITY);
     assert!(tracer.hit_on_plane(0, &away).is_none());
 }
+
+/// Two parallel triangles: closer than the tie window, the smaller id wins whichever is
+/// nearer; farther apart than it, the nearer wins whatever its id.
+#[test]
+fn near_ties_go_to_the_smaller_id_and_real_gaps_to_the_nearer() {
+    let quad = |z: f32| [vec3(-1.0, -1.0, z), vec3(1.0, -1.0, z), vec3(0.0, 1.0, z)];
+    let ray = Ray::new(vec3(0.1, 0.0, 10.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
+    let mut c = RayCounts::default();
+    // Gap 1e-6 relative to the distance 10: a tie. Triangle 0 is the farther one.
+    let tracer = Tracer::build(&[quad(0.0), quad(1e-5)]);
+    assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut c).unwrap().tri, 0);
+    // Gap 1e-3 relative: distinct surfaces, the nearer (id 1) wins.
+    let tracer = Tracer::build(&[quad(0.0), quad(1e-2)]);
+    assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut c).unwrap().tri, 1);
+    assert!(hyrt_tracer::depth_tie(10.0, 10.0 + 1e-4) && !hyrt_tracer::depth_tie(10.0, 10.0 + 1e-3));
+}

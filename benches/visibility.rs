@@ -1,0 +1,127 @@
+//! Thesis table 4.1: primary visibility by rays vs by rasterization.
+//!
+//! `cargo bench --bench visibility` renders each thesis scene at 640x480 and prints, measured
+//! side by side in one process (strategies alternated frame by frame, medians):
+//! - the visibility pass alone (`HYRT_BENCH_FRAMES`, default 15 frames each), with the raster
+//!   pass split into transform, rasterization and hit-point resolve;
+//! - the whole reference frame with each visibility strategy (a third as many frames);
+//! - rays per frame by kind, for each strategy;
+//! - the rasterizer alone in M triangles/s.
+//!
+//! Threads: all cores (`RAYON_NUM_THREADS` to change). Scenes: `HYRT_BENCH_SCENES`.
+
+use std::time::Instant;
+
+use hyrt::render::{Options, Renderer, Visibility};
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+fn main() {
+    let frames: usize = std::env::var("HYRT_BENCH_FRAMES").ok().and_then(|s| s.parse().ok()).unwrap_or(15);
+    let root = env!("CARGO_MANIFEST_DIR");
+    let scenes: Vec<String> = std::env::var("HYRT_BENCH_SCENES")
+        .map(|s| s.split(',').map(String::from).collect())
+        .unwrap_or_else(|_| {
+            ["conference", "office", "cornell-bunny-mirror"]
+                .iter()
+                .map(|s| format!("{root}/scenes/{s}.toml"))
+                .collect()
+        });
+    println!(
+        "primary visibility at 640x480, {} threads; visibility medians of {frames} frames, whole frames of {}\n",
+        rayon::current_num_threads(),
+        frames.div_ceil(3)
+    );
+    let mut vis_rows = Vec::new();
+    let mut ray_rows = Vec::new();
+    for spec in &scenes {
+        let mut scene = match hyrt::scene::load(spec) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("skipping {spec}: {e:#}");
+                continue;
+            }
+        };
+        scene.settings.width = 640;
+        scene.settings.height = 480;
+        let rays = Renderer::new(&scene, Options { visibility: Visibility::Rays, ..Options::default() });
+        let raster = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
+
+        let (mut t_rays, mut t_raster) = (Vec::new(), Vec::new());
+        let (mut t_xf, mut t_rz, mut t_rs) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..=frames {
+            let t = Instant::now();
+            let _ = rays.visibility();
+            let a = t.elapsed().as_secs_f64() * 1e3;
+            let t = Instant::now();
+            let (_, st) = raster.visibility();
+            let b = t.elapsed().as_secs_f64() * 1e3;
+            if i > 0 {
+                t_rays.push(a);
+                t_raster.push(b);
+                t_xf.push(st.time_ms["vis_transform"]);
+                t_rz.push(st.time_ms["vis_raster"]);
+                t_rs.push(st.time_ms["vis_resolve"]);
+            }
+        }
+        let (mut f_rays, mut f_raster) = (Vec::new(), Vec::new());
+        let (mut s_rays, mut s_raster) = (None, None);
+        for _ in 0..frames.div_ceil(3) {
+            let t = Instant::now();
+            let f = rays.render(&|| {});
+            f_rays.push(t.elapsed().as_secs_f64() * 1e3);
+            s_rays = Some(f.stats.rays);
+            let t = Instant::now();
+            let f = raster.render(&|| {});
+            f_raster.push(t.elapsed().as_secs_f64() * 1e3);
+            s_raster = Some(f.stats.rays);
+        }
+        let (vr, vz) = (median(&mut t_rays), median(&mut t_raster));
+        let (fr, fz) = (median(&mut f_rays), median(&mut f_raster));
+        let rz = median(&mut t_rz);
+        vis_rows.push(format!(
+            "| {} | {} | {:.1} | {:.1} ({:.1} + {:.1} + {:.1}) | {:.1}x | {:.0} | {:.0} | {:.2}x | {:.1} |",
+            scene.name,
+            scene.triangle_count(),
+            vr,
+            vz,
+            median(&mut t_xf),
+            rz,
+            median(&mut t_rs),
+            vr / vz,
+            fr,
+            fz,
+            fr / fz,
+            scene.triangle_count() as f64 / rz / 1e3,
+        ));
+        for (name, s) in [("rays", s_rays.unwrap()), ("raster", s_raster.unwrap())] {
+            ray_rows.push(format!(
+                "| {} | {name} | {} | {} | {} | {} |",
+                scene.name,
+                s.primary,
+                s.shadow,
+                s.specular,
+                s.total()
+            ));
+        }
+    }
+    println!(
+        "| scene | triangles | visibility ms, rays | visibility ms, raster (transform + raster + resolve) | speed-up | frame ms, rays | frame ms, raster | frame speed-up | rasterizer M tris/s |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in vis_rows {
+        println!("{r}");
+    }
+    println!("\n| scene | visibility | primary | shadow | specular | total |");
+    println!("|---|---|---:|---:|---:|---:|");
+    for r in ray_rows {
+        println!("{r}");
+    }
+}

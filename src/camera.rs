@@ -20,6 +20,9 @@ pub struct CameraRays {
     pub tan_y: f32,
     pub width: u32,
     pub height: u32,
+    /// `2 / width` and `2 / height`: products instead of a division per pixel.
+    pub two_over_w: f32,
+    pub two_over_h: f32,
 }
 
 impl CameraRays {
@@ -33,7 +36,18 @@ impl CameraRays {
             Some(fx) => (fx.to_radians() * 0.5).tan(),
             None => tan_y * width as f32 / height as f32,
         };
-        Self { eye: cam.eye, forward, right, up, tan_x, tan_y, width, height }
+        Self {
+            eye: cam.eye,
+            forward,
+            right,
+            up,
+            tan_x,
+            tan_y,
+            width,
+            height,
+            two_over_w: 2.0 / width as f32,
+            two_over_h: 2.0 / height as f32,
+        }
     }
 
     /// Unnormalised direction through the centre of pixel `(x, y)`.
@@ -46,8 +60,8 @@ impl CameraRays {
     /// the top-left corner of the image, `(x + 0.5, y + 0.5)` the centre of pixel `(x, y)`).
     #[inline]
     pub fn direction_at(&self, fx: f32, fy: f32) -> Vec3 {
-        let sx = (2.0 * fx / self.width as f32 - 1.0) * self.tan_x;
-        let sy = (1.0 - 2.0 * fy / self.height as f32) * self.tan_y;
+        let sx = (fx * self.two_over_w - 1.0) * self.tan_x;
+        let sy = (1.0 - fy * self.two_over_h) * self.tan_y;
         self.forward + self.right * sx + self.up * sy
     }
 }

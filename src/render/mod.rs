@@ -99,6 +99,8 @@ pub struct Renderer<'a> {
     pub plan: Plan,
     pub options: Options,
     pub camera: CameraRays,
+    /// Rasterization near-plane distance (see `visibility::near_plane`), fixed per scene.
+    pub raster_near: f32,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -111,7 +113,8 @@ impl<'a> Renderer<'a> {
         let tracer = Tracer::build(&scene.positions);
         let cam = scene.camera.expect("validated scene has a camera");
         let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
-        Self { scene, tracer, plan, options, camera }
+        let raster_near = visibility::near_plane(scene, &camera);
+        Self { scene, tracer, plan, options, camera, raster_near }
     }
 
     /// Wall time of the BVH build, in milliseconds.

@@ -34,7 +34,7 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
         }
         Visibility::Raster => {
             let t = Instant::now();
-            let near = near_plane(r);
+            let near = r.raster_near;
             let clip: Vec<[Vec4; 3]> =
                 r.scene.positions.par_iter().map(|tri| tri.map(|p| to_clip(&r.camera, near, p))).collect();
             let ids: Vec<u32> = (0..clip.len() as u32).collect();
@@ -75,9 +75,9 @@ fn primary_ray(r: &Renderer, x: u32, y: u32, c: &mut RayCounts) -> Option<Hit> {
 /// near distance costs no depth precision, so it only needs to be small enough that nothing
 /// a primary ray would see is clipped; it stays non-zero so that `w >= near > 0` after
 /// clipping.
-fn near_plane(r: &Renderer) -> f32 {
-    let (lo, hi) = r.scene.bounds().unwrap_or_default();
-    let extent = (hi - lo).max_element().max((r.camera.eye - lo).abs().max_element());
+pub(crate) fn near_plane(scene: &crate::scene::Scene, camera: &CameraRays) -> f32 {
+    let (lo, hi) = scene.bounds().unwrap_or_default();
+    let extent = (hi - lo).max_element().max((camera.eye - lo).abs().max_element());
     (extent * (-20f32).exp2()).max(f32::MIN_POSITIVE)
 }
 

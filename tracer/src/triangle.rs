@@ -45,7 +45,10 @@ impl RayPrecomp {
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
         let d = dir.to_array();
-        Self { origin, kx, ky, kz, sx: -d[kx] / d[kz], sy: -d[ky] / d[kz], sz: 1.0 / d[kz] }
+        // One division: the shear is the same for every triangle of the ray, so rounding it
+        // differently (a product with 1/dz rather than a quotient) cannot open a crack.
+        let sz = 1.0 / d[kz];
+        Self { origin, kx, ky, kz, sx: -d[kx] * sz, sy: -d[ky] * sz, sz }
     }
 }
 
@@ -77,10 +80,26 @@ pub fn intersect_plane(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<TriH
 
 #[inline(always)]
 fn intersect<const INSIDE: bool>(r: &RayPrecomp, v: &[Vec3A; 3], tmax: f32) -> Option<TriHit> {
+    // One copy of the test per axis permutation: with constant indices the permuted vertices
+    // stay in registers (runtime-indexed arrays go through the stack). The branch is the same
+    // for every triangle a ray meets, so it predicts perfectly.
+    match r.kz {
+        0 => intersect_perm::<INSIDE, 1, 2, 0>(r, v, tmax),
+        1 => intersect_perm::<INSIDE, 2, 0, 1>(r, v, tmax),
+        _ => intersect_perm::<INSIDE, 0, 1, 2>(r, v, tmax),
+    }
+}
+
+#[inline(always)]
+fn intersect_perm<const INSIDE: bool, const KX: usize, const KY: usize, const KZ: usize>(
+    r: &RayPrecomp,
+    v: &[Vec3A; 3],
+    tmax: f32,
+) -> Option<TriHit> {
     // Translate to the ray origin and permute.
     let p = |q: Vec3A| {
         let a = (q - r.origin).to_array();
-        [a[r.kx], a[r.ky], a[r.kz]]
+        [a[KX], a[KY], a[KZ]]
     };
     let (mut p0, mut p1, mut p2) = (p(v[0]), p(v[1]), p(v[2]));
     // Shear x and y so the ray runs along +z; z is scaled later, only if needed.

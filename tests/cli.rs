@@ -234,3 +234,32 @@ fn bare_mesh_files_are_framed_and_lit() {
         assert!(lit > img.pixels.len() / 10, "{name}: only {lit} of {} pixels lit", img.pixels.len());
     }
 }
+
+#[test]
+fn raster_visibility_from_the_cli() {
+    let d = out_dir("raster_cli");
+    let stats = d.join("s.json");
+    let (ok, _, err) = hyrt(&[
+        "render",
+        "cornell",
+        "--size",
+        "64x48",
+        "--visibility",
+        "raster",
+        "-o",
+        d.join("c.png").to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(err.contains("run   visibility  raster: z-buffer of 32 triangles"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
+    assert_eq!(v["rays"]["primary"], 0);
+    assert_eq!(v["options"]["visibility"], "raster");
+    for k in ["visibility", "vis_transform", "vis_raster", "vis_resolve"] {
+        assert!(v["time_ms"][k].as_f64().is_some(), "time_ms.{k} missing");
+    }
+    let (ok, _, err) =
+        hyrt(&["render", "cornell", "--visibility", "zbuffer", "-o", d.join("x.png").to_str().unwrap()]);
+    assert!(!ok && err.contains("possible values: rays, raster"), "{err}");
+}

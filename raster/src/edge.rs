@@ -45,7 +45,7 @@
 //! inside (reject); if the smallest values of all three edges are inside, every sample is (accept,
 //! no per-pixel tests); otherwise the block is walked pixel by pixel with incremental stepping.
 
-use crate::setup::{HALF_PIXEL, SUBPIXEL_ONE, SetupTri};
+use crate::setup::{HALF_PIXEL, SUBPIXEL_ONE, SetupTri, cross};
 
 /// Side of the square blocks used for hierarchical rejection/acceptance.
 pub(crate) const BLOCK: u32 = 8;
@@ -60,8 +60,9 @@ struct Edge {
 }
 
 impl Edge {
+    #[inline]
     fn new(a: [i32; 2], b: [i32; 2]) -> Self {
-        let a = a.map(i64::from);
+        let a = [i64::from(a[0]), i64::from(a[1])];
         let d = [i64::from(b[0]) - a[0], i64::from(b[1]) - a[1]];
         let top_left = d[1] < 0 || (d[1] == 0 && d[0] > 0);
         Self { a, d, bias: i64::from(!top_left) }
@@ -88,34 +89,121 @@ impl Edge {
     }
 }
 
-/// Calls `emit(px, py, [e0, e1, e2])` for every pixel of `[x0, x1) x [y0, y1)` whose centre the
-/// triangle covers, with the unbiased edge functions there (`e_i`: edge opposite vertex `i`).
-/// Pixels are visited block by block, each block in row-major order; each at most once.
+/// The three edge functions of a set-up triangle (`e_i`: the edge opposite vertex `i`), with
+/// their steps and fill-rule biases.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EdgeFns {
+    edges: [Edge; 3],
+    /// Change of each `e_i` for one pixel to the right.
+    pub sx: [i64; 3],
+    /// Change of each `e_i` for one pixel down.
+    pub sy: [i64; 3],
+    /// Fill-rule bias of each edge: a sample is inside iff `e_i - bias_i >= 0` for all `i`.
+    pub bias: [i64; 3],
+    /// `e0 + e1 + e2` at every sample: twice the triangle's area, `> 0`. Each `e_i` of a covered
+    /// sample is in `[0, area]` (all three are `>= bias_i >= 0` and they add up to `area`).
+    pub area: i64,
+}
+
+impl EdgeFns {
+    #[inline]
+    pub fn new(tri: &SetupTri) -> Self {
+        let [v0, v1, v2] = tri.v;
+        let edges = [Edge::new(v1, v2), Edge::new(v2, v0), Edge::new(v0, v1)];
+        let [e0, e1, e2] = &edges;
+        let wide = |v: [i32; 2]| [i64::from(v[0]), i64::from(v[1])];
+        Self {
+            edges,
+            sx: [e0.step_x(), e1.step_x(), e2.step_x()],
+            sy: [e0.step_y(), e1.step_y(), e2.step_y()],
+            bias: [e0.bias, e1.bias, e2.bias],
+            area: cross(wide(v0), wide(v1), wide(v2)),
+        }
+    }
+
+    /// Unbiased `[e0, e1, e2]` at the centre of pixel `(px, py)`.
+    #[inline]
+    pub fn at_pixel(&self, px: u32, py: u32) -> [i64; 3] {
+        let [e0, e1, e2] = &self.edges;
+        [e0.at_pixel(px, py), e1.at_pixel(px, py), e2.at_pixel(px, py)]
+    }
+}
+
+/// Bit mask with the lowest `n` bits set, `n <= 8`.
 #[inline]
-pub(crate) fn raster_rect(
-    tri: &SetupTri,
+pub(crate) fn low_bits(n: u32) -> u32 {
+    (1 << n) - 1
+}
+
+/// Coverage of a row from pixel `x` on: bit `j` of the result is set iff pixel `x + j`,
+/// `j < n <= 8`, is inside. `row` holds the biased edge values at pixel `x`, `sx` their steps.
+#[inline]
+pub(crate) fn row_mask(row: [i64; 3], sx: &[i64; 3], n: u32) -> u32 {
+    let mut p = row;
+    let mut mask = 0;
+    for j in 0..n {
+        // Inside iff all three biased values are >= 0, i.e. the sign bit of their OR is clear.
+        mask |= u32::from((p[0] | p[1] | p[2]) >= 0) << j;
+        for i in 0..3 {
+            p[i] += sx[i];
+        }
+    }
+    mask
+}
+
+/// Walks the pixels of `[x0, x1) x [y0, y1)` whose centre the triangle covers, as *spans*: calls
+/// `span(x, y, mask, e)` where bit `j` of `mask` (never 0, `j < 8`) is set iff pixel `(x + j, y)`
+/// is covered, and `e` are the unbiased edge functions at pixel `(x, y)` (which need not be
+/// covered itself; the values at `x + j` are `e + j * ef.sx`). Every covered pixel is reported
+/// exactly once, block by block, each block in row-major order.
+///
+/// Rectangles of at most 8x8 pixels (most triangles of a detailed mesh) are tested pixel by pixel
+/// from their corner; larger ones are walked in 8x8 blocks aligned to the pixel grid, with
+/// whole-block rejection and acceptance (module docs). Coverage is decided by the exact integer
+/// sign tests either way, so the two give the same pixels.
+///
+/// `row_mask(row, n)` must return [`row_mask`]`(row, &ef.sx, n)`; it is a parameter so that
+/// callers can pass a vectorised implementation.
+#[inline(always)]
+pub(crate) fn cover_rect(
+    ef: &EdgeFns,
     [x0, y0, x1, y1]: [u32; 4],
-    mut emit: impl FnMut(u32, u32, [i64; 3]),
+    row_mask: impl Fn([i64; 3], u32) -> u32,
+    mut span: impl FnMut(u32, u32, u32, [i64; 3]),
 ) {
     if x0 >= x1 || y0 >= y1 {
         return;
     }
-    let [v0, v1, v2] = tri.v;
-    let edges = [Edge::new(v1, v2), Edge::new(v2, v0), Edge::new(v0, v1)];
-    let sx = edges.map(|e| e.step_x());
-    let sy = edges.map(|e| e.step_y());
-    let bias = edges.map(|e| e.bias);
-    let span = i64::from(BLOCK - 1);
+    let (sx, sy, bias) = (&ef.sx, &ef.sy, &ef.bias);
+    let unbias = |p: [i64; 3]| [p[0] + bias[0], p[1] + bias[1], p[2] + bias[2]];
+
+    if x1 - x0 <= BLOCK && y1 - y0 <= BLOCK {
+        let e = ef.at_pixel(x0, y0);
+        let mut row = [e[0] - bias[0], e[1] - bias[1], e[2] - bias[2]];
+        for y in y0..y1 {
+            let mask = row_mask(row, x1 - x0);
+            if mask != 0 {
+                span(x0, y, mask, unbias(row));
+            }
+            for i in 0..3 {
+                row[i] += sy[i];
+            }
+        }
+        return;
+    }
+
+    let span_len = i64::from(BLOCK - 1);
     // Offsets from a block's top-left sample to its sample with the largest / smallest E.
-    let max_off: [i64; 3] = std::array::from_fn(|i| (sx[i] * span).max(0) + (sy[i] * span).max(0));
-    let min_off: [i64; 3] = std::array::from_fn(|i| (sx[i] * span).min(0) + (sy[i] * span).min(0));
+    let max_off: [i64; 3] = std::array::from_fn(|i| (sx[i] * span_len).max(0) + (sy[i] * span_len).max(0));
+    let min_off: [i64; 3] = std::array::from_fn(|i| (sx[i] * span_len).min(0) + (sy[i] * span_len).min(0));
 
     let mut by = y0 - y0 % BLOCK;
     while by < y1 {
         let mut bx = x0 - x0 % BLOCK;
         while bx < x1 {
             // Biased edge values at the block's top-left sample: inside iff >= 0.
-            let e: [i64; 3] = std::array::from_fn(|i| edges[i].at_pixel(bx, by) - bias[i]);
+            let e = ef.at_pixel(bx, by);
+            let e: [i64; 3] = std::array::from_fn(|i| e[i] - bias[i]);
             let rejected = (0..3).any(|i| e[i] + max_off[i] < 0);
             if !rejected {
                 let accepted = (0..3).all(|i| e[i] + min_off[i] >= 0);
@@ -124,15 +212,11 @@ pub(crate) fn raster_rect(
                 let (py0, py1) = (by.max(y0), (by + BLOCK).min(y1));
                 let (dx, dy) = (i64::from(px0 - bx), i64::from(py0 - by));
                 let mut row: [i64; 3] = std::array::from_fn(|i| e[i] + sx[i] * dx + sy[i] * dy);
+                let full = low_bits(px1 - px0);
                 for py in py0..py1 {
-                    let mut p = row;
-                    for px in px0..px1 {
-                        if accepted || (p[0] | p[1] | p[2]) >= 0 {
-                            emit(px, py, [p[0] + bias[0], p[1] + bias[1], p[2] + bias[2]]);
-                        }
-                        for i in 0..3 {
-                            p[i] += sx[i];
-                        }
+                    let mask = if accepted { full } else { row_mask(row, px1 - px0) };
+                    if mask != 0 {
+                        span(px0, py, mask, unbias(row));
                     }
                     for i in 0..3 {
                         row[i] += sy[i];
@@ -143,6 +227,28 @@ pub(crate) fn raster_rect(
         }
         by += BLOCK;
     }
+}
+
+/// Calls `emit(px, py, [e0, e1, e2])` for every pixel of `[x0, x1) x [y0, y1)` whose centre the
+/// triangle covers, with the unbiased edge functions there (`e_i`: edge opposite vertex `i`).
+/// Pixels are visited in the order of [`cover_rect`]; each at most once.
+#[inline]
+pub(crate) fn raster_rect(tri: &SetupTri, rect: [u32; 4], mut emit: impl FnMut(u32, u32, [i64; 3])) {
+    let ef = EdgeFns::new(tri);
+    cover_rect(
+        &ef,
+        rect,
+        |row, n| row_mask(row, &ef.sx, n),
+        |x, y, mask, e| {
+            let mut m = mask;
+            while m != 0 {
+                let j = m.trailing_zeros();
+                let dj = i64::from(j);
+                emit(x + j, y, [e[0] + ef.sx[0] * dj, e[1] + ef.sx[1] * dj, e[2] + ef.sx[2] * dj]);
+                m &= m - 1;
+            }
+        },
+    );
 }
 
 #[cfg(test)]

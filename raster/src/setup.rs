@@ -85,6 +85,18 @@ pub(crate) struct SetupTri {
 }
 
 impl SetupTri {
+    /// Depth plane constants: `depth(e) = (z0 + e1 dz[0]) + e2 dz[1]` before clamping.
+    #[inline]
+    pub fn z0(&self) -> f64 {
+        self.z0
+    }
+
+    /// See [`SetupTri::z0`].
+    #[inline]
+    pub fn dz(&self) -> [f64; 2] {
+        self.dz
+    }
+
     /// Depth `z/w` at a sample with (unbiased) edge functions `e = [e0, e1, e2]`.
     ///
     /// `e_i` is the edge function of the edge *opposite* vertex `i`, so the screen-space
@@ -114,15 +126,16 @@ impl SetupTri {
     /// rounding.
     #[inline]
     pub fn bary(&self, e: [i64; 3]) -> [f32; 2] {
-        let [p0, p1, p2] = self.persp.map(|p| p.map(f64::from));
+        let [p0, p1, p2] = &self.persp;
         let (e0, e1, e2) = (e[0] as f64, e[1] as f64, e[2] as f64);
-        let den = e0 * p0[0] + e1 * p1[0] + e2 * p2[0];
+        let p = |v: f32| f64::from(v);
+        let den = e0 * p(p0[0]) + e1 * p(p1[0]) + e2 * p(p2[0]);
         if den <= 0.0 {
             // Unreachable for covered samples (some e_i > 0); kept so no input can divide by 0.
             return [0.0, 0.0];
         }
-        let b1 = (e0 * p0[1] + e1 * p1[1] + e2 * p2[1]) / den;
-        let b2 = (e0 * p0[2] + e1 * p1[2] + e2 * p2[2]) / den;
+        let b1 = (e0 * p(p0[1]) + e1 * p(p1[1]) + e2 * p(p2[1])) / den;
+        let b2 = (e0 * p(p0[2]) + e1 * p(p1[2]) + e2 * p(p2[2])) / den;
         [b1 as f32, b2 as f32]
     }
 }
@@ -143,17 +156,22 @@ struct Projected {
 
 /// Rounds a screen coordinate in pixels to fixed point, `None` outside `±MAX_FIXED` (or NaN).
 ///
-/// Rounds half up, `floor(x + 1/2)`, which is translation invariant. It is written with a
-/// truncating cast because `f64::round` / `floor` are library calls on baseline x86-64, and this
-/// runs for every vertex.
+/// Rounds half up, `floor(x + 1/2)`, which is translation invariant. This runs for every vertex,
+/// and `f64::floor` is a library call on baseline x86-64 (and `as i64` a saturating conversion),
+/// so the floor is computed with the usual magic-number rounding: for `|f| < 2^51`, adding
+/// `1.5 * 2^52` rounds `f` to the nearest integer `r` (the sum's unit in the last place is 1),
+/// whose bits are those of the sum minus the constant's bits, and `floor(f)` is `r` or, when
+/// rounding went up, `r - 1`. Exact, and branch-free on the common path.
 #[inline]
 fn to_fixed(px: f64) -> Option<i64> {
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 * 2^52
     let f = px * SUBPIXEL_ONE as f64 + 0.5;
     if f.is_nan() || f.abs() > MAX_FIXED as f64 {
         return None;
     }
-    let t = f as i64; // truncates towards zero; exact and in range after the check above
-    Some(if t as f64 > f { t - 1 } else { t })
+    let m = f + MAGIC;
+    let r = m.to_bits() as i64 - MAGIC.to_bits() as i64;
+    Some(r - i64::from(m - MAGIC > f))
 }
 
 #[inline]
@@ -186,6 +204,13 @@ fn div_ceil_i64(a: i64, b: i64) -> i64 {
 
 /// Sets up one clip-space triangle, appending 0 or more [`SetupTri`]s (more than one only when
 /// clipping turned it into a polygon).
+///
+/// The common cases are decided on the `f32` input before anything is converted or projected,
+/// with comparisons that give exactly the answers of the `f64` plane tests in [`crate::clip`]
+/// (see [`outcode`]): a triangle entirely outside one viewport plane is dropped, and one inside
+/// the viewport and the depth range goes straight to [`setup_unclipped`]. Everything else takes
+/// the general path through [`clip_triangle`], which repeats those tests in `f64`.
+#[inline]
 pub(crate) fn setup_triangle(
     tri: &[Vec4; 3],
     id: u32,
@@ -193,21 +218,35 @@ pub(crate) fn setup_triangle(
     scratch: &mut ClipScratch,
     out: &mut Vec<SetupTri>,
 ) {
-    if !tri.iter().all(|v| v.is_finite()) {
+    if !(tri[0].is_finite() && tri[1].is_finite() && tri[2].is_finite()) {
         return;
     }
+    let codes = [outcode(tri[0]), outcode(tri[1]), outcode(tri[2])];
+    if codes[0] & codes[1] & codes[2] != 0 {
+        return;
+    }
+    if codes[0] | codes[1] | codes[2] == 0 {
+        setup_unclipped(&tri.map(|v| v.as_dvec4()), id, ctx, out);
+    } else {
+        setup_clipped(tri, id, ctx, scratch, out);
+    }
+}
+
+/// [`setup_triangle`] for triangles that reach outside the viewport or the depth range (a
+/// minority: kept out of line so that the common path stays small).
+#[cold]
+#[inline(never)]
+fn setup_clipped(
+    tri: &[Vec4; 3],
+    id: u32,
+    ctx: &SetupContext,
+    scratch: &mut ClipScratch,
+    out: &mut Vec<SetupTri>,
+) {
     let tri = tri.map(|v| v.as_dvec4());
     match clip_triangle(&tri, ctx.guard, scratch) {
         Clipped::Rejected => {}
-        Clipped::Inside => {
-            let bary = [DVec2::ZERO, DVec2::X, DVec2::Y];
-            let (Some(p0), Some(p1), Some(p2)) =
-                (project(tri[0], bary[0], ctx), project(tri[1], bary[1], ctx), project(tri[2], bary[2], ctx))
-            else {
-                return;
-            };
-            setup_polygon(&[p0, p1, p2], id, ctx, out);
-        }
+        Clipped::Inside => setup_unclipped(&tri, id, ctx, out),
         Clipped::Polygon(poly) => {
             let poly = poly.as_slice();
             let mut pv = [Projected::default(); MAX_POLY_VERTS];
@@ -219,6 +258,129 @@ pub(crate) fn setup_triangle(
             }
             setup_polygon(&pv[..poly.len()], id, ctx, out);
         }
+    }
+}
+
+/// Viewport outcode of a finite vertex: a bit set for each of the planes near, far, left, right,
+/// bottom, top that `v` is outside of (in some fixed bit order). Zero iff `0 <= z <= w`,
+/// `|x| <= w` and `|y| <= w`.
+///
+/// These are exactly the outcodes of [`crate::clip`], which tests the sign of `z`, `w - z`,
+/// `w + x`, `w - x`, `w + y`, `w - y` on the values widened to `f64`: for finite `a`, `b` the
+/// rounded `f64` difference `a - b` cannot overflow, rounding preserves signs, and it is zero only
+/// when `a == b`; so `w - z < 0` is exactly `w < z` and `w + x < 0` is exactly `x < -w` (negation
+/// is exact), which `f32` compares answer without converting anything.
+///
+/// A triangle whose three outcodes are zero is one that [`clip_triangle`] returns `Inside` for:
+/// the near and far distances are `z >= 0` and `w - z >= 0`; the guard-band side distances are
+/// `fl(g w) ± x` with `g >= 15` (see [`GuardBand::for_target`](crate::clip::GuardBand::for_target))
+/// and `w >= 0`, and `g w >= w` stays `>= w` after rounding (`w` is representable, rounding is
+/// monotone), so `fl(g w) ± x >= w - |x| >= 0`, which rounding keeps `>= 0`.
+#[inline]
+fn outcode(v: Vec4) -> u32 {
+    let w = Vec4::splat(v.w);
+    // Lanes x, y of `v < -w`: left, bottom. Lanes x, y, z of `w < v`: right, top, far.
+    let low = v.cmplt(-w).bitmask() & 0b11;
+    let high = w.cmplt(v).bitmask() & 0b111;
+    low | high << 2 | u32::from(v.z < 0.0) << 5
+}
+
+/// Sets up a triangle that needs no clipping: bit for bit what projecting its vertices and
+/// calling [`setup_polygon`] with them gives (one fan triangle, whose area is the polygon's), but
+/// in an order that drops triangles covering no sample before computing depths and perspective
+/// constants, in `i64` rather than `i128` (one cross product fits, see the module docs), and
+/// without the polygon's generality: this runs for nearly every triangle.
+fn setup_unclipped(tri: &[DVec4; 3], id: u32, ctx: &SetupContext, out: &mut Vec<SetupTri>) {
+    let (width, height) = (f64::from(ctx.width), f64::from(ctx.height));
+    let mut xy = [[0i64; 2]; 3];
+    let mut inv_w = [0.0f64; 3];
+    for i in 0..3 {
+        // Exactly the checks and arithmetic of `project`.
+        let pos = tri[i];
+        if pos.w <= 0.0 {
+            return;
+        }
+        inv_w[i] = 1.0 / pos.w;
+        if !inv_w[i].is_finite() {
+            return;
+        }
+        let sx = (pos.x * inv_w[i] + 1.0) * 0.5 * width;
+        let sy = (1.0 - pos.y * inv_w[i]) * 0.5 * height;
+        let (Some(x), Some(y)) = (to_fixed(sx), to_fixed(sy)) else {
+            return;
+        };
+        xy[i] = [x, y];
+    }
+    let area = cross(xy[0], xy[1], xy[2]);
+    if area == 0 || (ctx.cull_backfaces && area > 0) {
+        return;
+    }
+    let Some(bbox) = pixel_bounds(&xy, ctx) else {
+        return;
+    };
+    // `setup_polygon` swaps vertices 1 and 2 of a negatively oriented triangle.
+    let (b, c) = if area < 0 { (2, 1) } else { (1, 2) };
+    let inv_area = 1.0 / area.unsigned_abs() as f64;
+    let z0 = tri[0].z * inv_w[0];
+    // The maximum is exact and order-independent (positive, finite values): the same as `finish`.
+    let scale = 1.0 / inv_w[0].max(inv_w[1]).max(inv_w[2]);
+    // The barycentrics of the original vertices are (0, 0), (1, 0) and (0, 1), and q is finite
+    // and positive, so `q * 1.0 == q` and `q * 0.0 == +0.0`: `finish`'s `persp`, without the
+    // multiplications.
+    let persp = |i: usize| {
+        let q = (inv_w[i] * scale) as f32;
+        [q, if i == 1 { q } else { 0.0 }, if i == 2 { q } else { 0.0 }]
+    };
+    out.push(SetupTri {
+        // In range by the MAX_FIXED check in `to_fixed`.
+        v: [xy[0], xy[b], xy[c]].map(|p| [p[0] as i32, p[1] as i32]),
+        bbox,
+        id,
+        z0,
+        dz: [(tri[b].z * inv_w[b] - z0) * inv_area, (tri[c].z * inv_w[c] - z0) * inv_area],
+        persp: [persp(0), persp(b), persp(c)],
+    });
+}
+
+/// Inclusive pixel bounds of the samples a triangle with these fixed-point vertices may cover,
+/// clamped to the target, or `None` if no sample of the target is inside them.
+#[inline]
+fn pixel_bounds(xy: &[[i64; 2]; 3], ctx: &SetupContext) -> Option<[u32; 4]> {
+    // Pixel px is sampled at px*ONE + HALF, so the samples inside [min_x, max_x] are px in
+    // [ceil((min_x - HALF) / ONE), floor((max_x - HALF) / ONE)].
+    let min_x = xy[0][0].min(xy[1][0]).min(xy[2][0]);
+    let max_x = xy[0][0].max(xy[1][0]).max(xy[2][0]);
+    let min_y = xy[0][1].min(xy[1][1]).min(xy[2][1]);
+    let max_y = xy[0][1].max(xy[1][1]).max(xy[2][1]);
+    let x0 = div_ceil_i64(min_x - HALF_PIXEL, SUBPIXEL_ONE).max(0);
+    let y0 = div_ceil_i64(min_y - HALF_PIXEL, SUBPIXEL_ONE).max(0);
+    let x1 = (max_x - HALF_PIXEL).div_euclid(SUBPIXEL_ONE).min(i64::from(ctx.width) - 1);
+    let y1 = (max_y - HALF_PIXEL).div_euclid(SUBPIXEL_ONE).min(i64::from(ctx.height) - 1);
+    // In [0, width) x [0, height) by the clamps.
+    (x0 <= x1 && y0 <= y1).then_some([x0 as u32, y0 as u32, x1 as u32, y1 as u32])
+}
+
+/// The [`SetupTri`] of a positively oriented triangle of (snapped) area `area > 0` with pixel
+/// bounds `bbox`.
+#[inline]
+fn finish(verts: &[Projected; 3], area: i64, bbox: [u32; 4], id: u32) -> SetupTri {
+    let [a, b, c] = verts;
+    let inv_area = 1.0 / area as f64;
+    // q_i = (1 / w_i) / max_j (1 / w_j) in (0, 1]: proportional to 1 / w_i, and in range of
+    // f32 whatever w is.
+    let scale = 1.0 / verts.iter().map(|p| p.inv_w).fold(0.0, f64::max);
+    let persp = verts.map(|p| {
+        let q = p.inv_w * scale;
+        [q as f32, (q * p.bary.x) as f32, (q * p.bary.y) as f32]
+    });
+    SetupTri {
+        // In range by the MAX_FIXED check in `to_fixed`.
+        v: verts.map(|p| [p.x as i32, p.y as i32]),
+        bbox,
+        id,
+        z0: a.z,
+        dz: [(b.z - a.z) * inv_area, (c.z - a.z) * inv_area],
+        persp,
     }
 }
 
@@ -251,39 +413,10 @@ fn setup_polygon(pv: &[Projected], id: u32, ctx: &SetupContext, out: &mut Vec<Se
             tri_area = -tri_area;
         }
         let verts = [a, b, c];
-
-        // Pixel bounds: pixel px is sampled at px*ONE + HALF, so the samples inside
-        // [min_x, max_x] are px in [ceil((min_x - HALF) / ONE), floor((max_x - HALF) / ONE)].
-        let min_x = verts.iter().map(|p| p.x).min().unwrap_or(0);
-        let max_x = verts.iter().map(|p| p.x).max().unwrap_or(0);
-        let min_y = verts.iter().map(|p| p.y).min().unwrap_or(0);
-        let max_y = verts.iter().map(|p| p.y).max().unwrap_or(0);
-        let x0 = div_ceil_i64(min_x - HALF_PIXEL, SUBPIXEL_ONE).max(0);
-        let y0 = div_ceil_i64(min_y - HALF_PIXEL, SUBPIXEL_ONE).max(0);
-        let x1 = (max_x - HALF_PIXEL).div_euclid(SUBPIXEL_ONE).min(i64::from(ctx.width) - 1);
-        let y1 = (max_y - HALF_PIXEL).div_euclid(SUBPIXEL_ONE).min(i64::from(ctx.height) - 1);
-        if x0 > x1 || y0 > y1 {
+        let Some(bbox) = pixel_bounds(&verts.map(|p| xy(&p)), ctx) else {
             continue;
-        }
-
-        let inv_area = 1.0 / tri_area as f64;
-        // q_i = (1 / w_i) / max_j (1 / w_j) in (0, 1]: proportional to 1 / w_i, and in range of
-        // f32 whatever w is.
-        let scale = 1.0 / verts.iter().map(|p| p.inv_w).fold(0.0, f64::max);
-        let persp = verts.map(|p| {
-            let q = p.inv_w * scale;
-            [q as f32, (q * p.bary.x) as f32, (q * p.bary.y) as f32]
-        });
-        out.push(SetupTri {
-            // In range by the MAX_FIXED check in `to_fixed`.
-            v: verts.map(|p| [p.x as i32, p.y as i32]),
-            // In [0, width) x [0, height) by the clamps above.
-            bbox: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
-            id,
-            z0: a.z,
-            dz: [(b.z - a.z) * inv_area, (c.z - a.z) * inv_area],
-            persp,
-        });
+        };
+        out.push(finish(&verts, tri_area, bbox, id));
     }
 }
 

@@ -1,23 +1,24 @@
-//! Binning of set-up triangles into screen tiles, and parallel per-tile rasterization.
+//! Parallel setup and binning of triangles into screen tiles, and parallel per-tile rendering
+//! straight into the caller's full-frame buffers.
 //!
 //! # Determinism
 //!
 //! The output must be byte-identical for any number of threads. Three things ensure it:
 //!
-//! * setup is parallel over fixed-size chunks of the input, and the chunks' results are
-//!   concatenated in input order, so the set-up triangle list is the same for any thread count;
-//! * binning is sequential, so every bin lists its triangles in increasing index order;
-//! * each tile is rendered by exactly one task into its own buffer, visiting its bin in order, and
-//!   the tile buffers are copied into the full image in a fixed order afterwards.
+//! * setup is parallel over fixed-size chunks of the input, and every chunk bins its own set-up
+//!   triangles (in input order); a tile visits the chunks in input order, so every tile sees its
+//!   triangles in increasing input order for any thread count;
+//! * each tile is rendered by exactly one task, which alone writes the tile's pixels;
+//! * what a task writes depends only on the tile and its triangle list.
 //!
-//! The per-pixel `shade` function additionally makes the z-buffer independent of triangle order
-//! (ties broken by id), but the above is what makes it independent of scheduling.
+//! The per-pixel depth test additionally makes the z-buffer independent of triangle order (ties
+//! broken by id), but the above is what makes it independent of scheduling.
 
 use rayon::prelude::*;
 
 use crate::EMPTY_ID;
 use crate::clip::ClipScratch;
-use crate::edge::{BLOCK, raster_rect};
+use crate::edge::BLOCK;
 use crate::setup::{SetupContext, SetupTri, setup_triangle};
 
 use glam::Vec4;
@@ -26,147 +27,187 @@ use glam::Vec4;
 /// to balance a few hundred thousand triangles over the cores.
 const SETUP_CHUNK: usize = 2048;
 
+/// How many input triangles ahead setup asks for: reading the input (48 bytes per triangle) is
+/// a large part of the setup time of scenes with many rejected triangles, and the hardware
+/// prefetcher alone leaves the core waiting.
+const PREFETCH_AHEAD: usize = 24;
+
+/// Starts loading an input triangle into the cache. A hint only.
+#[inline(always)]
+fn prefetch_input(tri: &[Vec4; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let p: *const i8 = (tri as *const [Vec4; 3]).cast();
+        // SAFETY: prefetching has no effect on memory or on the program's state; SSE is part of
+        // x86-64.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<[Vec4; 3]>() - 1));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = tri;
+}
+
 /// Rounds a requested tile size up to a multiple of the block size, within `[BLOCK, 4096]`.
 pub(crate) fn effective_tile_size(requested: u32) -> u32 {
     requested.clamp(BLOCK, 4096).next_multiple_of(BLOCK)
 }
 
-/// Sets up all triangles in parallel. The result is a list of chunks whose concatenation is in
-/// input order (it is never concatenated: bins point into the chunks). With `ids`, triangles with
-/// id [`EMPTY_ID`] are dropped; `ids: None` uses id 0 for all.
-pub(crate) fn setup_all(tris: &[[Vec4; 3]], ids: Option<&[u32]>, ctx: &SetupContext) -> Vec<Vec<SetupTri>> {
-    tris.par_chunks(SETUP_CHUNK)
-        .enumerate()
-        .map(|(c, chunk)| {
-            let mut out = Vec::with_capacity(chunk.len());
-            let mut scratch = ClipScratch::new();
-            for (k, tri) in chunk.iter().enumerate() {
-                let id = ids.map_or(0, |ids| ids[c * SETUP_CHUNK + k]);
-                if id != EMPTY_ID {
-                    setup_triangle(tri, id, ctx, &mut scratch, &mut out);
-                }
-            }
-            out
-        })
-        .collect()
-}
-
 /// Grid of `tile`-pixel square tiles covering a `width x height` target.
 #[derive(Clone, Copy, Debug)]
-struct TileGrid {
-    width: u32,
-    height: u32,
-    tile: u32,
-    tiles_x: u32,
-    tiles_y: u32,
+pub(crate) struct TileGrid {
+    pub width: u32,
+    pub height: u32,
+    pub tile: u32,
+    pub tiles_x: u32,
+    pub tiles_y: u32,
+    /// `ceil(2^32 / tile)`: `x / tile == (x * recip) >> 32` for every pixel coordinate (see
+    /// [`TileGrid::tile_of`]). Binning divides 4 coordinates per triangle.
+    recip: u64,
 }
 
 impl TileGrid {
-    fn new(width: u32, height: u32, tile: u32) -> Self {
-        Self { width, height, tile, tiles_x: width.div_ceil(tile), tiles_y: height.div_ceil(tile) }
+    pub fn new(width: u32, height: u32, tile: u32) -> Self {
+        Self {
+            width,
+            height,
+            tile,
+            tiles_x: width.div_ceil(tile),
+            tiles_y: height.div_ceil(tile),
+            recip: (1u64 << 32).div_ceil(u64::from(tile)),
+        }
     }
 
-    fn count(&self) -> usize {
+    pub fn count(&self) -> usize {
         self.tiles_x as usize * self.tiles_y as usize
     }
 
     /// Pixel rectangle `[x0, y0, x1, y1)` of tile `t` (row-major tile index).
-    fn rect(&self, t: usize) -> [u32; 4] {
+    pub fn rect(&self, t: usize) -> [u32; 4] {
         let (tx, ty) = (t as u32 % self.tiles_x, t as u32 / self.tiles_x);
         let (x0, y0) = (tx * self.tile, ty * self.tile);
         [x0, y0, (x0 + self.tile).min(self.width), (y0 + self.tile).min(self.height)]
     }
 
-    /// Lists, for every tile, the triangles whose pixel bounds overlap it, in input order.
-    fn bin<'t>(&self, chunks: &'t [Vec<SetupTri>]) -> Vec<Vec<&'t SetupTri>> {
-        let mut bins = vec![Vec::new(); self.count()];
-        for tri in chunks.iter().flatten() {
-            let [x0, y0, x1, y1] = tri.bbox;
-            for ty in y0 / self.tile..=y1 / self.tile {
-                for tx in x0 / self.tile..=x1 / self.tile {
-                    bins[(ty * self.tiles_x + tx) as usize].push(tri);
-                }
+    /// Inclusive tile ranges `[tx0, ty0, tx1, ty1]` overlapped by an inclusive pixel box.
+    #[inline]
+    fn tiles_of(&self, [x0, y0, x1, y1]: [u32; 4]) -> [u32; 4] {
+        [self.tile_of(x0), self.tile_of(y0), self.tile_of(x1), self.tile_of(y1)]
+    }
+
+    /// `x / tile` for a pixel coordinate `x < MAX_TARGET_DIM = 2^16`, without a division.
+    ///
+    /// With `recip = 2^32 / tile + r`, `0 <= r < 1`: `x recip / 2^32 = x / tile + x r / 2^32`,
+    /// and the error `x r / 2^32 < 2^-16` cannot reach the next integer, because `x / tile` is
+    /// either an integer or at least `1 / tile >= 2^-12` below one (`tile <= 4096`).
+    #[inline]
+    fn tile_of(&self, x: u32) -> u32 {
+        ((u64::from(x) * self.recip) >> 32) as u32
+    }
+
+    /// Splits a row-major full-frame buffer into the rows of each tile: entry `t` holds the rows
+    /// of tile `t`, top to bottom, each `x1 - x0` long. The slices are disjoint, so tiles can be
+    /// written in parallel without synchronisation or copies.
+    pub fn split<'b, T>(&self, buf: &'b mut [T]) -> Vec<Vec<&'b mut [T]>> {
+        assert_eq!(buf.len(), self.width as usize * self.height as usize);
+        let rows = self.tile.min(self.height) as usize;
+        let mut tiles: Vec<Vec<&mut [T]>> = (0..self.count()).map(|_| Vec::with_capacity(rows)).collect();
+        for (y, row) in buf.chunks_exact_mut(self.width as usize).enumerate() {
+            let first = y / self.tile as usize * self.tiles_x as usize;
+            for (tile, seg) in tiles[first..].iter_mut().zip(row.chunks_mut(self.tile as usize)) {
+                tile.push(seg);
             }
         }
-        bins
+        tiles
     }
 }
 
-/// Rendered tiles (`None`: no triangle touched the tile), before placement into full-frame
-/// buffers.
-pub(crate) struct Tiles<P> {
-    grid: TileGrid,
-    tiles: Vec<Option<Vec<P>>>,
+/// The set-up triangles of one chunk of the input, binned by tile.
+struct Chunk {
+    tris: Vec<SetupTri>,
+    /// Triangles overlapping tile `t`: `items[start[t]..start[t + 1]]`, indices into `tris` in
+    /// increasing order.
+    start: Vec<u32>,
+    items: Vec<u32>,
 }
 
-/// Rasterizes the set-up triangles (chunks from [`setup_all`]) tile by tile, in parallel. Each
-/// tile buffer starts as `empty`, and `shade(tri, pixel, e)` is called for every pixel covered by
-/// `tri` with its unbiased edge functions `e`, triangles in input order. The result is
-/// independent of the thread count. `width` and `height` must be non-zero.
-pub(crate) fn render<P, F>(
-    chunks: &[Vec<SetupTri>],
-    width: u32,
-    height: u32,
-    tile_size: u32,
-    empty: P,
-    shade: F,
-) -> Tiles<P>
-where
-    P: Copy + Send + Sync,
-    F: Fn(&SetupTri, &mut P, [i64; 3]) + Sync,
-{
-    let grid = TileGrid::new(width, height, effective_tile_size(tile_size));
-    let bins = grid.bin(chunks);
-    let tiles = bins
-        .par_iter()
-        .enumerate()
-        .map(|(t, bin)| {
-            if bin.is_empty() {
-                return None;
+impl Chunk {
+    /// Bins `tris` with a counting sort (two passes over the tile ranges).
+    fn new(tris: Vec<SetupTri>, grid: &TileGrid) -> Self {
+        let mut start = vec![0u32; grid.count() + 1];
+        for tri in &tris {
+            let [tx0, ty0, tx1, ty1] = grid.tiles_of(tri.bbox);
+            for ty in ty0..=ty1 {
+                let row = (ty * grid.tiles_x) as usize;
+                for t in row + tx0 as usize..=row + tx1 as usize {
+                    start[t + 1] += 1;
+                }
             }
-            let [x0, y0, x1, y1] = grid.rect(t);
-            let tw = (x1 - x0) as usize;
-            let mut buf = vec![empty; tw * (y1 - y0) as usize];
-            for &tri in bin {
-                let [bx0, by0, bx1, by1] = tri.bbox;
-                // Tile ∩ triangle bounds (bbox is inclusive, rect exclusive).
-                let rect = [x0.max(bx0), y0.max(by0), x1.min(bx1 + 1), y1.min(by1 + 1)];
-                raster_rect(tri, rect, |px, py, e| {
-                    let k = (py - y0) as usize * tw + (px - x0) as usize;
-                    shade(tri, &mut buf[k], e);
-                });
+        }
+        for t in 0..grid.count() {
+            start[t + 1] += start[t];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![0u32; start[grid.count()] as usize];
+        for (i, tri) in tris.iter().enumerate() {
+            let [tx0, ty0, tx1, ty1] = grid.tiles_of(tri.bbox);
+            for ty in ty0..=ty1 {
+                let row = (ty * grid.tiles_x) as usize;
+                for t in row + tx0 as usize..=row + tx1 as usize {
+                    items[fill[t] as usize] = i as u32;
+                    fill[t] += 1;
+                }
             }
-            Some(buf)
-        })
-        .collect();
-    Tiles { grid, tiles }
+        }
+        Self { tris, start, items }
+    }
 }
 
-impl<P: Sync> Tiles<P> {
-    /// Writes `f(pixel)` for every pixel of every rendered tile into the row-major full-frame
-    /// buffer `out` (`width * height` entries), leaving pixels of untouched tiles as they are.
-    /// Each band of one tile row is a contiguous slice of `out`, so bands are filled in parallel
-    /// without overlapping writes.
-    pub fn place<T: Send>(&self, out: &mut [T], f: impl Fn(&P) -> T + Sync) {
-        let grid = &self.grid;
-        let width = grid.width as usize;
-        assert_eq!(out.len(), width * grid.height as usize);
-        out.par_chunks_mut(grid.tile as usize * width)
-            .zip(self.tiles.par_chunks(grid.tiles_x as usize))
+/// All set-up triangles, binned into the tiles of `grid`.
+pub(crate) struct Binned {
+    pub grid: TileGrid,
+    chunks: Vec<Chunk>,
+}
+
+impl Binned {
+    /// Sets up and bins all triangles in parallel. With `ids`, triangles with id [`EMPTY_ID`] are
+    /// dropped; `ids: None` uses id 0 for all.
+    pub fn new(tris: &[[Vec4; 3]], ids: Option<&[u32]>, ctx: &SetupContext, tile_size: u32) -> Self {
+        let grid = TileGrid::new(ctx.width, ctx.height, effective_tile_size(tile_size));
+        let chunks = tris
+            .par_chunks(SETUP_CHUNK)
             .enumerate()
-            .for_each(|(ty, (band, row_tiles))| {
-                for (tx, buf) in row_tiles.iter().enumerate() {
-                    let Some(buf) = buf else { continue };
-                    let [x0, _, x1, _] = grid.rect(ty * grid.tiles_x as usize + tx);
-                    let tw = (x1 - x0) as usize;
-                    for (r, src) in buf.chunks_exact(tw).enumerate() {
-                        let start = r * width + x0 as usize;
-                        for (d, s) in band[start..start + tw].iter_mut().zip(src) {
-                            *d = f(s);
-                        }
+            .map(|(c, chunk)| {
+                let mut out = Vec::with_capacity(chunk.len());
+                let mut scratch = ClipScratch::new();
+                for (k, tri) in chunk.iter().enumerate() {
+                    if let Some(ahead) = chunk.get(k + PREFETCH_AHEAD) {
+                        prefetch_input(ahead);
+                    }
+                    let id = ids.map_or(0, |ids| ids[c * SETUP_CHUNK + k]);
+                    if id != EMPTY_ID {
+                        setup_triangle(tri, id, ctx, &mut scratch, &mut out);
                     }
                 }
-            });
+                Chunk::new(out, &grid)
+            })
+            .collect();
+        Self { grid, chunks }
+    }
+
+    /// The triangles overlapping tile `t`, in input order.
+    pub fn tile(&self, t: usize) -> impl Iterator<Item = &SetupTri> {
+        self.chunks.iter().flat_map(move |c| {
+            let items = &c.items[c.start[t] as usize..c.start[t + 1] as usize];
+            items.iter().map(|&i| &c.tris[i as usize])
+        })
+    }
+
+    /// Whether no triangle overlaps tile `t`.
+    pub fn tile_is_empty(&self, t: usize) -> bool {
+        self.chunks.iter().all(|c| c.start[t] == c.start[t + 1])
     }
 }
 
@@ -183,6 +224,14 @@ mod tests {
     }
 
     #[test]
+    fn tile_of_divides_exactly() {
+        for tile in (8..=4096).step_by(8) {
+            let grid = TileGrid::new(crate::MAX_TARGET_DIM, 1, tile);
+            assert!((0..crate::MAX_TARGET_DIM).all(|x| grid.tile_of(x) == x / tile), "tile {tile}");
+        }
+    }
+
+    #[test]
     fn tiles_cover_the_target_exactly() {
         let grid = TileGrid::new(100, 37, 16);
         let mut hits = vec![0u8; 100 * 37];
@@ -195,5 +244,21 @@ mod tests {
             }
         }
         assert!(hits.iter().all(|&h| h == 1));
+    }
+
+    #[test]
+    fn split_gives_each_tile_its_rows() {
+        let grid = TileGrid::new(100, 37, 16);
+        let mut buf: Vec<usize> = (0..100 * 37).collect();
+        let tiles = grid.split(&mut buf);
+        for (t, rows) in tiles.iter().enumerate() {
+            let [x0, y0, x1, y1] = grid.rect(t);
+            assert_eq!(rows.len(), (y1 - y0) as usize);
+            for (r, row) in rows.iter().enumerate() {
+                let y = y0 as usize + r;
+                let expect: Vec<usize> = (x0 as usize..x1 as usize).map(|x| y * 100 + x).collect();
+                assert_eq!(**row, expect[..]);
+            }
+        }
     }
 }

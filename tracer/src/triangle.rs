@@ -22,9 +22,8 @@ pub fn gamma(n: i32) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub struct RayPrecomp {
     origin: Vec3A,
-    /// Axis permutation: `kz` is the largest |direction| component.
-    kx: usize,
-    ky: usize,
+    /// The largest |direction| component; the test runs in the permuted frame
+    /// `(kz + 1, kz + 2, kz) mod 3`.
     kz: usize,
     /// Shear coefficients `(-dx/dz, -dy/dz, 1/dz)` in the permuted frame.
     sx: f32,
@@ -48,7 +47,7 @@ impl RayPrecomp {
         // One division: the shear is the same for every triangle of the ray, so rounding it
         // differently (a product with 1/dz rather than a quotient) cannot open a crack.
         let sz = 1.0 / d[kz];
-        Self { origin, kx, ky, kz, sx: -d[kx] * sz, sy: -d[ky] * sz, sz }
+        Self { origin, kz, sx: -d[kx] * sz, sy: -d[ky] * sz, sz }
     }
 }
 

@@ -1,0 +1,150 @@
+//! Time per 640x480 frame of [`rasterize`] on synthetic scenes, with the options a renderer uses
+//! (reversed-Z, two-sided), on the global rayon pool (one thread per core):
+//!
+//! * `sphere`: a 100k-triangle sphere filling the middle of the screen (setup-bound: small
+//!   triangles, a few pixels each);
+//! * `quads`: 6 layers of 8x6 overlapping quads covering the screen (fill-bound: large triangles,
+//!   6 fragments per pixel);
+//! * `tiny`: 200k random sub-pixel to 3-pixel triangles over the whole screen;
+//! * `offscreen`: 300k small triangles, four fifths of them outside the view (trivial rejection),
+//!   plus two huge floor triangles crossing the near plane (clipping, guard band).
+//!
+//! Run with `cargo bench -p hyrt-raster`.
+
+use divan::Bencher;
+use glam::{Mat4, Vec3, Vec4};
+use hyrt_raster::{RasterOptions, rasterize};
+
+const WIDTH: u32 = 640;
+const HEIGHT: u32 = 480;
+
+fn main() {
+    divan::main();
+}
+
+/// Reversed-Z infinite perspective looking down -z from `eye`, 60 degrees vertical field of view.
+fn camera(eye: Vec3, target: Vec3) -> Mat4 {
+    let aspect = WIDTH as f32 / HEIGHT as f32;
+    let proj = glam::camera::rh::proj::directx::perspective_infinite_reverse(60f32.to_radians(), aspect, 0.1);
+    proj * glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y)
+}
+
+/// A deterministic PRNG (xorshift64*), uniform in `[0, 1)`.
+struct Rng(u64);
+
+impl Rng {
+    fn f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+fn transform(view_proj: &Mat4, world: &[[Vec3; 3]]) -> Vec<[Vec4; 3]> {
+    world.iter().map(|t| t.map(|p| *view_proj * p.extend(1.0))).collect()
+}
+
+/// A UV sphere of radius 1 at the origin: `2 * slices * (stacks - 1)` triangles.
+fn sphere(slices: u32, stacks: u32) -> Vec<[Vec3; 3]> {
+    let vertex = |i: u32, j: u32| {
+        let (theta, phi) = (
+            j as f32 / stacks as f32 * std::f32::consts::PI,
+            i as f32 / slices as f32 * std::f32::consts::TAU,
+        );
+        Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+    };
+    let mut tris = Vec::new();
+    for j in 0..stacks {
+        for i in 0..slices {
+            let (a, b, c, d) = (vertex(i, j), vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1));
+            if j > 0 {
+                tris.push([a, b, c]);
+            }
+            if j + 1 < stacks {
+                tris.push([b, d, c]);
+            }
+        }
+    }
+    tris
+}
+
+fn scene_sphere() -> Vec<[Vec4; 3]> {
+    let view_proj = camera(Vec3::new(0.0, 0.0, 3.2), Vec3::ZERO);
+    transform(&view_proj, &sphere(250, 201))
+}
+
+fn scene_quads() -> Vec<[Vec4; 3]> {
+    let view_proj = camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO);
+    let mut world = Vec::new();
+    for layer in 0..6 {
+        let z = -(layer as f32) * 0.7;
+        for qy in 0..6 {
+            for qx in 0..8 {
+                // Each quad overlaps its neighbours by half its size; the grid covers the view.
+                let (x, y) = (qx as f32 * 2.0 - 8.0 + layer as f32 * 0.3, qy as f32 * 2.0 - 6.0);
+                let p = |dx: f32, dy: f32| Vec3::new(x + dx, y + dy, z);
+                world.push([p(0.0, 0.0), p(3.0, 0.0), p(0.0, 3.0)]);
+                world.push([p(3.0, 0.0), p(3.0, 3.0), p(0.0, 3.0)]);
+            }
+        }
+    }
+    transform(&view_proj, &world)
+}
+
+fn scene_tiny() -> Vec<[Vec4; 3]> {
+    let view_proj = camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO);
+    let mut rng = Rng(1);
+    let world: Vec<_> = (0..200_000)
+        .map(|_| {
+            let c = Vec3::new(rng.f32() * 12.0 - 6.0, rng.f32() * 9.0 - 4.5, rng.f32() * -5.0);
+            let mut p = || c + Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 0.06;
+            [p(), p(), p()]
+        })
+        .collect();
+    transform(&view_proj, &world)
+}
+
+fn scene_offscreen() -> Vec<[Vec4; 3]> {
+    let view_proj = camera(Vec3::new(0.0, 1.5, 0.0), Vec3::new(0.0, 1.5, -1.0));
+    let mut rng = Rng(2);
+    let mut world: Vec<_> = (0..300_000)
+        .map(|_| {
+            let angle = rng.f32() * std::f32::consts::TAU;
+            let r = 2.0 + rng.f32() * 30.0;
+            let c = Vec3::new(angle.cos() * r, rng.f32() * 3.0, angle.sin() * r);
+            let mut p = || c + Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 0.2;
+            [p(), p(), p()]
+        })
+        .collect();
+    let floor = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+    world.push([floor(-500.0, 500.0), floor(500.0, 500.0), floor(0.0, -500.0)]);
+    world.push([floor(-500.0, -500.0), floor(500.0, -500.0), floor(0.0, 500.0)]);
+    transform(&view_proj, &world)
+}
+
+fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>) {
+    let ids: Vec<u32> = (0..tris.len() as u32).collect();
+    let opts = RasterOptions { reversed_z: true, ..Default::default() };
+    bencher.bench(|| rasterize(divan::black_box(&tris), &ids, WIDTH, HEIGHT, &opts));
+}
+
+#[divan::bench]
+fn sphere_100k(bencher: Bencher) {
+    bench(bencher, scene_sphere());
+}
+
+#[divan::bench]
+fn quads_fill(bencher: Bencher) {
+    bench(bencher, scene_quads());
+}
+
+#[divan::bench]
+fn tiny_200k(bencher: Bencher) {
+    bench(bencher, scene_tiny());
+}
+
+#[divan::bench]
+fn offscreen_300k(bencher: Bencher) {
+    bench(bencher, scene_offscreen());
+}

@@ -1,0 +1,357 @@
+//! The z-buffer of [`crate::rasterize`]: per tile, a depth test over every covered pixel, then one
+//! *resolve* pass that computes the barycentrics of the surviving fragments only.
+//!
+//! # Deferred barycentrics
+//!
+//! The depth test needs only the depth and the id of a fragment; its barycentrics matter only if
+//! it is still visible at the end. So the tile keeps, per pixel, the depth and the index of the
+//! winning set-up triangle in the tile's triangle list, and [`ZBuffer::resolve`] evaluates the
+//! winner's edge functions at the pixel (exact integers: the values the traversal had) and its
+//! barycentrics with [`SetupTri::bary`]. The stored result is bit-identical to computing them for
+//! every fragment, with one evaluation per pixel instead of one per fragment (scenes have 1.5-3.5
+//! fragments per covered pixel). A triangle rather than an id, because a clipped triangle is
+//! several set-up triangles with one id, and ids need not be unique.
+//!
+//! The resolve writes the tile's rows straight into the caller's full-frame buffers (see
+//! [`crate::tile::TileGrid::split`]): no per-tile output buffers, no copies.
+//!
+//! # Vector kernel
+//!
+//! On x86-64 CPUs with AVX2 or AVX-512 (detected at run time), the coverage tests and the depth
+//! test work on rows of 8 pixels at once (`crate::simd`), computing exactly what the scalar kernel
+//! [`ZBuffer::draw_scalar`] computes.
+
+use std::mem::MaybeUninit;
+
+use rayon::prelude::*;
+
+use crate::edge::{EdgeFns, cover_rect, row_mask};
+use crate::setup::SetupTri;
+use crate::tile::Binned;
+use crate::{EMPTY_DEPTH, EMPTY_DEPTH_REVERSED, EMPTY_ID, Target};
+
+/// Tile-list index of an empty z-buffer entry.
+const NONE: u32 = u32::MAX;
+
+/// Slack after the last pixel of the tile buffers, so that an 8-pixel row access starting at any
+/// pixel of the tile stays inside the buffer.
+const PAD: usize = 8;
+
+/// The part of an inclusive pixel box inside a tile rectangle, as a half-open rectangle.
+#[inline]
+pub(crate) fn clip_to_tile([x0, y0, x1, y1]: [u32; 4], [bx0, by0, bx1, by1]: [u32; 4]) -> [u32; 4] {
+    [x0.max(bx0), y0.max(by0), x1.min(bx1 + 1), y1.min(by1 + 1)]
+}
+
+/// Instruction set of the kernel, chosen once per call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Isa {
+    Scalar,
+    /// Only constructed when the CPU has AVX2 (see [`Isa::detect`]).
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    /// Only constructed when the CPU has AVX2, AVX-512 F, DQ and VL.
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+impl Isa {
+    /// The kernels this CPU runs, fastest first (always ending with [`Isa::Scalar`]).
+    #[cfg(test)]
+    pub fn available() -> Vec<Self> {
+        let mut isas = Vec::new();
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") {
+                if has!("avx512f") && has!("avx512dq") && has!("avx512vl") {
+                    isas.push(Isa::Avx512);
+                }
+                isas.push(Isa::Avx2);
+            }
+        }
+        isas.push(Isa::Scalar);
+        isas
+    }
+
+    /// The fastest kernel this CPU runs.
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") {
+                if has!("avx512f") && has!("avx512dq") && has!("avx512vl") {
+                    return Isa::Avx512;
+                }
+                return Isa::Avx2;
+            }
+        }
+        Isa::Scalar
+    }
+}
+
+/// The z-buffer of one tile. Kept per worker and reused across tiles.
+#[derive(Default)]
+pub(crate) struct ZBuffer<'a> {
+    /// Tile rectangle `[x0, y0, x1, y1)`.
+    pub rect: [u32; 4],
+    /// Tile width: the row stride of `depth` and `win`.
+    pub w: usize,
+    /// Row-major depth of the closest fragment so far, or the empty depth; `PAD` extra entries.
+    pub depth: Vec<f32>,
+    /// Index in `tris` of the triangle of the closest fragment so far, or [`NONE`]; `PAD` extra.
+    pub win: Vec<u32>,
+    /// The tile's triangles, in input order.
+    pub tris: Vec<&'a SetupTri>,
+}
+
+/// Whether fragment `(depth d, triangle tri)` replaces the z-buffer entry `(cur, win)`.
+///
+/// Lexicographic (depth, id): a total order on fragments, so the surviving fragment is the same
+/// whatever order they arrive in. NaN never wins (comparisons are false). Equal (depth, id) keeps
+/// the earlier fragment: triangles arrive in input order. An empty entry has id [`EMPTY_ID`],
+/// which no set-up triangle has, so it loses every tie.
+#[inline(always)]
+pub(crate) fn wins<const REVERSED: bool>(d: f32, id: u32, cur: f32, win: u32, tris: &[&SetupTri]) -> bool {
+    let closer = if REVERSED { d > cur } else { d < cur };
+    closer || (d == cur && id < if win == NONE { EMPTY_ID } else { tris[win as usize].id })
+}
+
+impl<'a> ZBuffer<'a> {
+    fn reset(&mut self, rect: [u32; 4], empty_depth: f32, tris: impl Iterator<Item = &'a SetupTri>) {
+        self.rect = rect;
+        self.w = (rect[2] - rect[0]) as usize;
+        let len = self.w * (rect[3] - rect[1]) as usize + PAD;
+        self.depth.clear();
+        self.depth.resize(len, empty_depth);
+        self.win.clear();
+        self.win.resize(len, NONE);
+        self.tris.clear();
+        self.tris.extend(tris);
+        // Indices must stay below NONE. Far beyond anything that fits in memory (a SetupTri is
+        // ~100 bytes), but checked: a wrong index would be a silent wrong answer.
+        assert!(self.tris.len() < NONE as usize, "too many triangles in one tile");
+    }
+
+    /// Depth-tests every triangle of the tile.
+    fn draw_all<const REVERSED: bool>(&mut self, isa: Isa) {
+        match isa {
+            Isa::Scalar => (0..self.tris.len() as u32).for_each(|i| self.draw_scalar::<REVERSED>(i)),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
+            Isa::Avx2 => unsafe { crate::simd::draw_all_avx2::<REVERSED>(self) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
+            Isa::Avx512 => unsafe { crate::simd::draw_all_avx512::<REVERSED>(self) },
+        }
+    }
+
+    /// Depth-tests every pixel of the tile covered by triangle `idx` of the tile list.
+    #[inline(always)]
+    pub(crate) fn draw_scalar<const REVERSED: bool>(&mut self, idx: u32) {
+        let tri = self.tris[idx as usize];
+        let [tx0, ty0, ..] = self.rect;
+        let ef = EdgeFns::new(tri);
+        let (sx1, sx2) = (ef.sx[1], ef.sx[2]);
+        let w = self.w;
+        let (depth, win, tris) = (&mut self.depth, &mut self.win, &self.tris);
+        let rect = clip_to_tile(self.rect, tri.bbox);
+        cover_rect(
+            &ef,
+            rect,
+            |row, n| row_mask(row, &ef.sx, n),
+            |x, y, mask, e| {
+                let k = (y - ty0) as usize * w + (x - tx0) as usize;
+                let n = (u32::BITS - mask.leading_zeros()) as usize;
+                let (depth, win) = (&mut depth[k..k + n], &mut win[k..k + n]);
+                let (mut e1, mut e2) = (e[1], e[2]);
+                for j in 0..n {
+                    if mask >> j & 1 != 0 {
+                        let d = tri.depth([0, e1, e2]);
+                        if wins::<REVERSED>(d, tri.id, depth[j], win[j], tris) {
+                            depth[j] = d;
+                            win[j] = idx;
+                        }
+                    }
+                    e1 += sx1;
+                    e2 += sx2;
+                }
+            },
+        );
+    }
+
+    /// Writes the tile's depth, id and barycentrics into its rows of the full-frame buffers:
+    /// every element of every row.
+    fn resolve(&self, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
+        let [tx0, ty0, ..] = self.rect;
+        let w = self.w;
+        for (r, ((d_row, i_row), b_row)) in depth.into_iter().zip(id).zip(bary).enumerate() {
+            d_row.write_copy_of_slice(&self.depth[r * w..(r + 1) * w]);
+            // Runs of pixels with the same winner (long for large triangles): one edge setup per
+            // run, then edge values stepped along it. The runs cover the row.
+            let wins = &self.win[r * w..(r + 1) * w];
+            let mut c = 0;
+            while c < w {
+                let win = wins[c];
+                let end = c + wins[c..].iter().take_while(|&&v| v == win).count();
+                if win == NONE {
+                    i_row[c..end].iter_mut().for_each(|i| _ = i.write(EMPTY_ID));
+                    b_row[c..end].iter_mut().for_each(|b| _ = b.write([0.0; 2]));
+                } else {
+                    let tri = self.tris[win as usize];
+                    i_row[c..end].iter_mut().for_each(|i| _ = i.write(tri.id));
+                    let ef = EdgeFns::new(tri);
+                    let e = ef.at_pixel(tx0 + c as u32, ty0 + r as u32);
+                    bary_run(tri, &ef, e, &mut b_row[c..end]);
+                }
+                c = end;
+            }
+        }
+    }
+}
+
+/// The rows of one tile in a full-frame output buffer, not yet initialised.
+type Rows<'o, T> = Vec<&'o mut [MaybeUninit<T>]>;
+
+/// `out[j] = tri.bary(e + j * ef.sx)`: the barycentrics of a run of covered pixels of one triangle,
+/// `e` the edge functions at the first.
+///
+/// Scalar, and inlined into the resolve loop: the pixels are independent, so the out-of-order
+/// core overlaps their divisions, which bound the cost. (A vector version, called per run, was no
+/// faster: most runs are a few pixels long.)
+#[inline(always)]
+fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [MaybeUninit<[f32; 2]>]) {
+    for b in out {
+        b.write(tri.bary(e));
+        e = [e[0] + ef.sx[0], e[1] + ef.sx[1], e[2] + ef.sx[2]];
+    }
+}
+
+/// Renders the binned triangles into a new [`Target`] with the given kernel.
+pub(crate) fn render(binned: &Binned, reversed: bool, isa: Isa) -> Target {
+    let grid = binned.grid;
+    let len = grid.width as usize * grid.height as usize;
+    let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
+    // The buffers are written exactly once each, by the tile that owns the pixel, so they are
+    // not initialised first: zero-filling 16 bytes per pixel (the allocator reuses freed memory,
+    // so even zeroing is a real fill) would be a measurable part of the frame.
+    let (mut depth, mut id, mut bary) =
+        (Vec::with_capacity(len), Vec::with_capacity(len), Vec::with_capacity(len));
+    let depth_tiles = grid.split(&mut depth.spare_capacity_mut()[..len]);
+    let id_tiles = grid.split(&mut id.spare_capacity_mut()[..len]);
+    let bary_tiles = grid.split(&mut bary.spare_capacity_mut()[..len]);
+    depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).enumerate().for_each_init(
+        ZBuffer::default,
+        |zb, (t, ((depth, id), bary))| {
+            if binned.tile_is_empty(t) {
+                depth.into_iter().flatten().for_each(|d| _ = d.write(empty_depth));
+                id.into_iter().flatten().for_each(|i| _ = i.write(EMPTY_ID));
+                bary.into_iter().flatten().for_each(|b| _ = b.write([0.0; 2]));
+                return;
+            }
+            zb.reset(grid.rect(t), empty_depth, binned.tile(t));
+            if reversed {
+                zb.draw_all::<true>(isa);
+            } else {
+                zb.draw_all::<false>(isa);
+            }
+            zb.resolve(depth, id, bary);
+        },
+    );
+    // SAFETY: the first `len` elements of each buffer are initialised: `TileGrid::split` cuts
+    // them into the rows of the tiles, which partition the image (`tile` tests), and every tile
+    // writes every element of its rows, in the branch above or in `resolve` (whose runs cover
+    // each row).
+    unsafe {
+        depth.set_len(len);
+        id.set_len(len);
+        bary.set_len(len);
+    }
+    Target { width: grid.width, height: grid.height, depth, id, bary }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec4;
+
+    use super::*;
+    use crate::setup::SetupContext;
+
+    /// xorshift64*: a deterministic PRNG for test scenes.
+    struct Rng(u64);
+
+    impl Rng {
+        fn f32(&mut self) -> f32 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// Triangles of every size class the kernels treat differently: sub-pixel, a few pixels, 8x8
+    /// blocks, tile-filling, guard-band sized (edge values beyond 2^51), crossing the near plane,
+    /// plus exact duplicates and coplanar overlaps with other ids (depth ties).
+    fn scene() -> (Vec<[Vec4; 3]>, Vec<u32>) {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut tris = Vec::new();
+        for i in 0..3000 {
+            let size = [0.005, 0.03, 0.2, 1.5, 4000.0][i % 5];
+            let (cx, cy) = (rng.f32() * 2.4 - 1.2, rng.f32() * 2.4 - 1.2);
+            let w = 0.5 + rng.f32() * 4.0;
+            let mut v = |_| {
+                let z = if i % 97 == 0 { rng.f32() * 2.0 - 1.0 } else { rng.f32() * 0.9 + 0.05 };
+                let (x, y) = (cx + (rng.f32() - 0.5) * size, cy + (rng.f32() - 0.5) * size);
+                Vec4::new(x * w, y * w, z * w, w)
+            };
+            tris.push([v(0), v(1), v(2)]);
+        }
+        // Ties: duplicates (same and other ids), and a coplanar overlapping pair.
+        for i in (0..600).step_by(7) {
+            tris.push(tris[i]);
+            tris.push([tris[i][1], tris[i][2], tris[i][0]]);
+        }
+        let quad = |x0: f32, x1: f32| {
+            let p = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
+            [p(x0, -0.8), p(x1, -0.8), p(x0, 0.8)]
+        };
+        tris.extend([quad(-0.9, 0.3), quad(-0.5, 0.9)]);
+        // Ids in scrambled order (so that ties go either way) and a few repeated ones.
+        let n = tris.len() as u64;
+        let ids = (0..n).map(|i| if i % 11 == 3 { 5 } else { (i * 7919 % n) as u32 }).collect();
+        (tris, ids)
+    }
+
+    fn render_with(isa: Isa, tris: &[[Vec4; 3]], ids: &[u32], reversed: bool, tile: u32) -> Target {
+        let (width, height) = (203, 157);
+        let ctx = SetupContext::new(width, height, false);
+        let binned = Binned::new(tris, Some(ids), &ctx, tile);
+        render(&binned, reversed, isa)
+    }
+
+    fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
+        (
+            t.depth.iter().map(|d| d.to_bits()).collect(),
+            t.id.clone(),
+            t.bary.iter().map(|b| b.map(f32::to_bits)).collect(),
+        )
+    }
+
+    #[test]
+    fn every_kernel_gives_identical_buffers() {
+        let (tris, ids) = scene();
+        let isas = Isa::available();
+        assert_eq!(isas.first().copied(), Some(Isa::detect()));
+        for reversed in [false, true] {
+            for tile in [8, 64] {
+                let reference = render_with(Isa::Scalar, &tris, &ids, reversed, tile);
+                assert!(reference.id.iter().filter(|&&id| id != EMPTY_ID).count() > 10_000);
+                let reference = bits(&reference);
+                for &isa in &isas {
+                    let t = render_with(isa, &tris, &ids, reversed, tile);
+                    assert!(bits(&t) == reference, "{isa:?}, reversed {reversed}, tile {tile}");
+                }
+            }
+        }
+    }
+}

@@ -1,5 +1,6 @@
 //! Time per 640x480 frame of [`rasterize`] on synthetic scenes, with the options a renderer uses
-//! (reversed-Z, two-sided), on the global rayon pool (one thread per core):
+//! (reversed-Z, two-sided, the tracer's `2^-16` depth tie window), on the global rayon pool (one
+//! thread per core):
 //!
 //! * `sphere`: a 100k-triangle sphere filling the middle of the screen (setup-bound: small
 //!   triangles, a few pixels each);
@@ -125,7 +126,7 @@ fn scene_offscreen() -> Vec<[Vec4; 3]> {
 
 fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>) {
     let ids: Vec<u32> = (0..tris.len() as u32).collect();
-    let opts = RasterOptions { reversed_z: true, ..Default::default() };
+    let opts = RasterOptions { reversed_z: true, depth_tie: 1.0 / 65536.0, ..Default::default() };
     bencher.bench(|| rasterize(divan::black_box(&tris), &ids, WIDTH, HEIGHT, &opts));
 }
 

@@ -20,19 +20,41 @@
 //!   unless [`RasterOptions::cull_backfaces`] is set.
 //! * **Barycentrics** `(b1, b2)` are relative to the vertices of the triangle as passed in (even
 //!   when it was clipped), perspective-correct; the point is `(1 - b1 - b2) v0 + b1 v1 + b2 v2` in
-//!   any space in which the triangle is affine (world, view, clip).
-//! * **Ties**: when two triangles have the same depth at a pixel, the smaller id wins (then the
-//!   earlier triangle in the slice, for equal ids), so the result does not depend on the triangle
-//!   order or on the number of threads.
+//!   any space in which the triangle is affine (world, view, clip). They are interpolated over the
+//!   *snapped* vertex positions (see below), so they describe the pixel centre up to the snapping
+//!   (1/512 px); callers needing the exact hit point should intersect the pixel's ray with the
+//!   triangle's plane.
+//! * **Ties**: with [`RasterOptions::depth_tie`] `= 0` (the default), when two triangles have the
+//!   same depth at a pixel the smaller id wins (then the earlier triangle in the slice, for equal
+//!   ids), so the result does not depend on the triangle order or on the number of threads. With a
+//!   window `depth_tie > 0`, depths `d`, `d0` with `|d - d0| <= depth_tie * max(|d|, |d0|)` are a
+//!   tie, won by the smaller id, and otherwise the closer depth wins: the rule of ray casting
+//!   against exact distances (for reversed-Z depths `n / w` the window is the relative distance
+//!   along the ray). Ties are decided pairwise as fragments arrive, in input order, so the result
+//!   is still independent of the thread count and the tile size; but the window is not transitive,
+//!   so when three or more surfaces are within one window of each other the winner may depend on
+//!   the input order (unlike with `depth_tie = 0`).
 //!
 //! # Precision and limits
 //!
 //! Vertices are snapped to 1/256 pixel (8 sub-pixel bits) and coverage is decided with exact `i64`
 //! edge functions and the top-left fill rule: a closed or shared-edge mesh covers every pixel
-//! centre exactly once. The side planes are handled with a *guard band*: triangles are clipped only
-//! where they reach more than `2^19` pixels outside the image (which keeps fixed-point products in
-//! `i64`), so large triangles crossing the image border are rasterized unclipped. Targets may be at
-//! most [`MAX_TARGET_DIM`] pixels on a side. Triangles with a NaN or infinite coordinate, zero
+//! centre exactly once.
+//!
+//! Depth is *not* interpolated over the snapped vertices: at a grazing angle, the tilt that
+//! snapping gives the plane would cost up to ~1e-4 relative. Per triangle (or per polygon left by
+//! near/far clipping) the plane `z/w = A X + B Y + C` is computed in `f64` from the unsnapped
+//! screen positions, evaluated in `f64` at the pixel centre and rounded to `f32`: depth is
+//! accurate to the `f32` rounding plus a few `f64` roundings (see `setup.rs`). It is then clamped
+//! to the range of the polygon's vertex depths, which no point of it can leave: that bounds the
+//! error where the plane is ill-conditioned (edge-on slivers). At pixel centres that the snapped
+//! coverage includes but the exact triangle does not (within 1/512 px of its edges) the value is
+//! the plane extended there, clamped.
+//!
+//! The side planes are handled with a *guard band*: triangles are clipped only where they reach
+//! more than `2^19` pixels outside the image (which keeps fixed-point products in `i64`), so large
+//! triangles crossing the image border are rasterized unclipped. Targets may be at most
+//! [`MAX_TARGET_DIM`] pixels on a side. Triangles with a NaN or infinite coordinate, zero
 //! (snapped) area, or id [`EMPTY_ID`] are skipped; no input can write outside the buffers.
 //!
 //! # Structure
@@ -41,11 +63,11 @@
 //!
 //! * `clip.rs`: homogeneous clipping (near, far, guard band), barycentrics carried as attributes;
 //! * `setup.rs`: viewport transform, fixed-point snapping and ranges, facing, interpolation
-//!   constants (depth, perspective-correct barycentrics);
+//!   constants (the unsnapped depth plane and its clamp range, perspective-correct barycentrics);
 //! * `edge.rs`: edge functions, top-left fill rule, 8x8 block rejection/acceptance;
 //! * `tile.rs`: parallel setup and binning, tiles as disjoint parts of the output buffers;
-//! * `zbuf.rs`: the per-tile depth test, and barycentrics computed once per pixel for the
-//!   winning triangle;
+//! * `zbuf.rs`: the per-tile depth test (with the tie window), and barycentrics computed once per
+//!   pixel for the winning triangle;
 //! * `simd.rs`: the same depth test on rows of 8 pixels with AVX2 or AVX-512, chosen at run time
 //!   (x86-64 only; the scalar kernel is used elsewhere). Results are bit-identical.
 //!
@@ -92,12 +114,14 @@ pub struct Target {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Depth `z / w` of the visible surface in `[0, 1]`, or [`EMPTY_DEPTH`].
+    /// Depth `z / w` of the visible surface in `[0, 1]` (from its unsnapped plane: see the crate
+    /// docs), or [`EMPTY_DEPTH`] ([`EMPTY_DEPTH_REVERSED`] with [`RasterOptions::reversed_z`]).
     pub depth: Vec<f32>,
     /// Id of the visible triangle, or [`EMPTY_ID`].
     pub id: Vec<u32>,
     /// Perspective-correct barycentrics `(b1, b2)` of the pixel centre in the visible triangle
-    /// (`b0 = 1 - b1 - b2`), relative to its original, unclipped vertices; `[0, 0]` when empty.
+    /// (`b0 = 1 - b1 - b2`), relative to its original, unclipped vertices, interpolated over the
+    /// snapped vertex positions (crate docs); `[0, 0]` when empty.
     pub bary: Vec<[f32; 2]>,
 }
 
@@ -122,7 +146,9 @@ impl Target {
 }
 
 /// Options of [`rasterize`], [`coverage_count`] and [`for_each_fragment`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+///
+/// Not `Eq`: [`RasterOptions::depth_tie`] is a float.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RasterOptions {
     /// Side of the square screen tiles rendered in parallel, in pixels. Rounded up to a multiple of
     /// 8 and clamped to `[8, 4096]`. It affects speed only, never the result. Default 64.
@@ -139,11 +165,30 @@ pub struct RasterOptions {
     /// is then the near plane `w >= n` and `z >= 0` an infinitely distant far plane. Default
     /// `false`.
     pub reversed_z: bool,
+    /// Relative depth window within which two fragments are a tie, won by the smaller id (used
+    /// by [`rasterize`] only). A fragment of depth `d` against a stored `d0`: if
+    /// `|d - d0| <= depth_tie * max(|d|, |d0|)` (in `f32`) the smaller id wins, otherwise the
+    /// closer depth (the smaller, or the larger with [`RasterOptions::reversed_z`]).
+    ///
+    /// Why: ray casting decides between surfaces by exact distances and treats hits within a
+    /// relative window as a tie for the smaller id, so that coplanar duplicates (a surface
+    /// modelled twice, decals) resolve to the same triangle everywhere instead of speckling; a
+    /// rasterized G-buffer must apply the same rule to agree with it. With reversed-Z the depth
+    /// `n / w` makes the window the relative distance along the pixel's ray, as in the tracer.
+    /// Depth is accurate to a few `f32` ulps (crate docs), so windows of `2^-16` and above are
+    /// meaningful.
+    ///
+    /// Ties are decided pairwise as fragments arrive, in input order: the result is the same for
+    /// any thread count and tile size, but when three or more surfaces lie within one window of
+    /// each other it may depend on the input order (the window is not transitive), unlike with
+    /// `0`. Default `0.0`: exact comparison, equal depths go to the smaller id. Values `<= 0` and
+    /// NaN mean `0`; `+inf` means every pair of fragments is a tie.
+    pub depth_tie: f32,
 }
 
 impl Default for RasterOptions {
     fn default() -> Self {
-        Self { tile_size: 64, cull_backfaces: false, reversed_z: false }
+        Self { tile_size: 64, cull_backfaces: false, reversed_z: false, depth_tie: 0.0 }
     }
 }
 
@@ -154,9 +199,11 @@ pub struct Fragment {
     pub x: u32,
     /// Pixel row, `< height` (0 at the top).
     pub y: u32,
-    /// Depth `z / w` at the pixel centre, in `[0, 1]`.
+    /// Depth `z / w` at the pixel centre, in `[0, 1]` (from the unsnapped plane, clamped: see the
+    /// crate docs).
     pub depth: f32,
-    /// Perspective-correct barycentrics `(b1, b2)` in the original triangle.
+    /// Perspective-correct barycentrics `(b1, b2)` in the original triangle (interpolated over
+    /// the snapped vertices).
     pub bary: [f32; 2],
 }
 
@@ -171,9 +218,9 @@ fn check_dims(width: u32, height: u32) {
 /// barycentrics per pixel.
 ///
 /// `tris[i]` has id `ids[i]`; ids need not be unique or ordered, but they break depth ties (the
-/// smaller wins) and [`EMPTY_ID`] is reserved. A `width` or `height` of 0 gives empty buffers.
-/// The result is identical for any rayon thread count, tile size and triangle order (for unique
-/// ids).
+/// smaller wins, see [`RasterOptions::depth_tie`]) and [`EMPTY_ID`] is reserved. A `width` or
+/// `height` of 0 gives empty buffers. The result is identical for any rayon thread count and
+/// tile size, and with `depth_tie = 0` for any triangle order (for unique ids).
 ///
 /// # Panics
 ///
@@ -186,7 +233,9 @@ pub fn rasterize(tris: &[[Vec4; 3]], ids: &[u32], width: u32, height: u32, opts:
     }
     let ctx = SetupContext::new(width, height, opts.cull_backfaces);
     let binned = tile::Binned::new(tris, Some(ids), &ctx, opts.tile_size);
-    zbuf::render(&binned, opts.reversed_z, zbuf::Isa::detect())
+    // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
+    let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
+    zbuf::render(&binned, opts.reversed_z, tie, zbuf::Isa::detect())
 }
 
 /// Counts, per pixel, how many triangles cover the pixel centre (no depth test), with exactly the
@@ -222,7 +271,7 @@ pub fn coverage_count(tris: &[[Vec4; 3]], width: u32, height: u32, opts: &Raster
 
 /// Calls `f` once for every pixel whose centre the triangle covers, with the depth and
 /// barycentrics [`rasterize`] would store there (before the depth test). Sequential; pixels of a
-/// clipped triangle may come in several runs. `opts.tile_size` is ignored.
+/// clipped triangle may come in several runs. `opts.tile_size` and `opts.depth_tie` are ignored.
 ///
 /// # Panics
 ///

@@ -7,8 +7,11 @@
 //! * coverage from the same exact integer edge values (sign tests);
 //! * the depth with the same `f64` operations in the same order as [`SetupTri::depth`] (IEEE
 //!   operations are correctly rounded whatever the vector width; no fused multiply-add), the same
-//!   clamp and the same rounding to `f32`;
-//! * the same comparisons, with the rare ties decided by [`wins`] itself.
+//!   rounding to `f32` and the same clamp ([`crate::setup::clamp_depth`], written as the `max` /
+//!   `min` instructions compute it);
+//! * the same comparisons: closer or not, and for `TIE` the same `f32` window test as
+//!   [`crate::zbuf::in_tie_window`]; the rare ties (equal depths, or within the window) are decided
+//!   by [`wins`] itself.
 //!
 //! The traversal ([`draw`]) is [`crate::edge::cover_rect`]'s, specialised: the same per-pixel
 //! coverage tests, plus a test of the whole tile rectangle first (every pixel of a tile inside a
@@ -41,7 +44,7 @@ trait Lanes<'t> {
     /// Triangles with `area >= MAX_AREA` take the scalar path (see [`Avx2::MAX_AREA`]).
     const MAX_AREA: i64;
 
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns) -> Self;
+    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self;
     /// `e + j sx_i` for `j = 0..8`: edge `i` along a row, from its value `e` at the first pixel.
     fn row(&self, i: usize, e: i64) -> Self::Row;
     /// The row below: `+ sy_i`.
@@ -52,7 +55,7 @@ trait Lanes<'t> {
     fn inside(&self, r: &[Self::Row; 3]) -> u32;
     /// Depth-tests the 8 pixels of `zb` from index `k` on whose bits are set in `covered`, given
     /// their unbiased `e1`, `e2`.
-    fn test_row<const REVERSED: bool>(
+    fn test_row<const REVERSED: bool, const TIE: bool>(
         &self,
         zb: &mut ZBuffer<'t>,
         k: usize,
@@ -69,16 +72,22 @@ fn row_of<T>(buf: &mut [T], k: usize) -> &mut [T; 8] {
     (&mut buf[k..k + 8]).try_into().unwrap()
 }
 
-/// The lanes of `covered` whose fragment beats the z-buffer entry although its depth is equal:
-/// [`wins`] per lane of `ties` (rare: coplanar surfaces, or depth 0 against an empty reversed-Z
-/// pixel).
+/// The lanes of `ties` whose fragment beats the z-buffer entry although its depth is equal (or,
+/// for `TIE`, within the tie window): [`wins`] per lane (rare: coplanar or intersecting surfaces,
+/// or depth 0 against an empty reversed-Z pixel).
 #[inline(always)]
-fn tie_winners<const REVERSED: bool>(zb: &ZBuffer, k: usize, tri: &SetupTri, d: &[f32; 8], ties: u32) -> u32 {
+fn tie_winners<const REVERSED: bool, const TIE: bool>(
+    zb: &ZBuffer,
+    k: usize,
+    tri: &SetupTri,
+    d: &[f32; 8],
+    ties: u32,
+) -> u32 {
     let mut won = 0;
     let mut t = ties;
     while t != 0 {
         let j = t.trailing_zeros() as usize;
-        if wins::<REVERSED>(d[j], tri.id, zb.depth[k + j], zb.win[k + j], &zb.tris) {
+        if wins::<REVERSED, TIE>(d[j], tri.id, zb.depth[k + j], zb.win[k + j], &zb.tris, zb.tie) {
             won |= 1 << j;
         }
         t &= t - 1;
@@ -88,7 +97,7 @@ fn tie_winners<const REVERSED: bool>(zb: &ZBuffer, k: usize, tri: &SetupTri, d: 
 
 /// Depth-tests every triangle of the tile.
 #[inline(always)]
-fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>) {
+fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer<'t>) {
     for idx in 0..zb.tris.len() as u32 {
         if let Some(&next) = zb.tris.get(idx as usize + 6) {
             // Triangles are read from memory written by setup long before: prefetching the (up
@@ -104,9 +113,9 @@ fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>) {
         }
         let ef = EdgeFns::new(zb.tris[idx as usize]);
         if ef.area >= L::MAX_AREA {
-            zb.draw_scalar::<REVERSED>(idx);
+            zb.draw_scalar::<REVERSED, TIE>(idx);
         } else {
-            draw::<L, REVERSED>(zb, idx, &ef);
+            draw::<L, REVERSED, TIE>(zb, idx, &ef);
         }
     }
 }
@@ -114,7 +123,7 @@ fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>) {
 /// Depth-tests `rows` rows of `n <= 8` pixels, all covered, from tile index `k` and unbiased
 /// edge values `e` at its first pixel.
 #[inline(always)]
-fn test_covered<'t, L: Lanes<'t>, const REVERSED: bool>(
+fn test_covered<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
     zb: &mut ZBuffer<'t>,
     c: &L,
     mut k: usize,
@@ -125,7 +134,7 @@ fn test_covered<'t, L: Lanes<'t>, const REVERSED: bool>(
     let covered = low_bits(n);
     let (mut e1, mut e2) = (c.row(1, e[1]), c.row(2, e[2]));
     for _ in 0..rows {
-        c.test_row::<REVERSED>(zb, k, covered, e1, e2);
+        c.test_row::<REVERSED, TIE>(zb, k, covered, e1, e2);
         e1 = c.down(1, e1);
         e2 = c.down(2, e2);
         k += zb.w;
@@ -135,7 +144,7 @@ fn test_covered<'t, L: Lanes<'t>, const REVERSED: bool>(
 /// Depth-tests `rows` rows of `n <= 8` pixels from tile index `k` and *biased* edge values `e`
 /// at its first pixel, testing coverage per pixel.
 #[inline(always)]
-fn test_partial<'t, L: Lanes<'t>, const REVERSED: bool>(
+fn test_partial<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
     zb: &mut ZBuffer<'t>,
     c: &L,
     mut k: usize,
@@ -147,7 +156,7 @@ fn test_partial<'t, L: Lanes<'t>, const REVERSED: bool>(
     for _ in 0..rows {
         let mask = c.inside(&ev) & low_bits(n);
         if mask != 0 {
-            c.test_row::<REVERSED>(zb, k, mask, c.unbias(1, ev[1]), c.unbias(2, ev[2]));
+            c.test_row::<REVERSED, TIE>(zb, k, mask, c.unbias(1, ev[1]), c.unbias(2, ev[2]));
         }
         ev = each(|i| c.down(i, ev[i]));
         k += zb.w;
@@ -156,14 +165,18 @@ fn test_partial<'t, L: Lanes<'t>, const REVERSED: bool>(
 
 /// Depth-tests the pixels of the tile covered by triangle `idx` of the tile list.
 #[inline(always)]
-fn draw<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>, idx: u32, ef: &EdgeFns) {
+fn draw<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
+    zb: &mut ZBuffer<'t>,
+    idx: u32,
+    ef: &EdgeFns,
+) {
     let tri = zb.tris[idx as usize];
     let [tx0, ty0, ..] = zb.rect;
     let [x0, y0, x1, y1] = clip_to_tile(zb.rect, tri.bbox);
     if x0 >= x1 || y0 >= y1 {
         return;
     }
-    let c = L::new(tri, idx, ef);
+    let c = L::new(tri, idx, ef, zb.tie);
     let (sx, sy, bias) = (ef.sx, ef.sy, ef.bias);
     let w = zb.w;
     let index = |x: u32, y: u32| (y - ty0) as usize * w + (x - tx0) as usize;
@@ -183,13 +196,13 @@ fn draw<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>, idx: u32, 
         while x < x1 {
             let d = i64::from(x - x0);
             let e = each(|i| e[i] + bias[i] + sx[i] * d);
-            test_covered::<L, REVERSED>(zb, &c, index(x, y0), (x1 - x).min(BLOCK), y1 - y0, e);
+            test_covered::<L, REVERSED, TIE>(zb, &c, index(x, y0), (x1 - x).min(BLOCK), y1 - y0, e);
             x += BLOCK;
         }
         return;
     }
     if x1 - x0 <= BLOCK && y1 - y0 <= BLOCK {
-        test_partial::<L, REVERSED>(zb, &c, index(x0, y0), x1 - x0, y1 - y0, e);
+        test_partial::<L, REVERSED, TIE>(zb, &c, index(x0, y0), x1 - x0, y1 - y0, e);
         return;
     }
 
@@ -215,9 +228,9 @@ fn draw<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>, idx: u32, 
                 let (k, n, rows) = (index(px0, py0), px1 - px0, py1 - py0);
                 if accepted {
                     let e = each(|i| e[i] + bias[i]);
-                    test_covered::<L, REVERSED>(zb, &c, k, n, rows, e);
+                    test_covered::<L, REVERSED, TIE>(zb, &c, k, n, rows, e);
                 } else {
-                    test_partial::<L, REVERSED>(zb, &c, k, n, rows, e);
+                    test_partial::<L, REVERSED, TIE>(zb, &c, k, n, rows, e);
                 }
             }
             eb = each(|i| eb[i] + block_sx[i]);
@@ -229,14 +242,14 @@ fn draw<'t, L: Lanes<'t>, const REVERSED: bool>(zb: &mut ZBuffer<'t>, idx: u32, 
 
 /// Depth-tests every triangle of the tile with the AVX2 kernel.
 #[target_feature(enable = "avx2")]
-pub(crate) fn draw_all_avx2<const REVERSED: bool>(zb: &mut ZBuffer) {
-    draw_all::<Avx2, REVERSED>(zb);
+pub(crate) fn draw_all_avx2<const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer) {
+    draw_all::<Avx2, REVERSED, TIE>(zb);
 }
 
 /// Depth-tests every triangle of the tile with the AVX-512 kernel.
 #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
-pub(crate) fn draw_all_avx512<const REVERSED: bool>(zb: &mut ZBuffer) {
-    draw_all::<Avx512, REVERSED>(zb);
+pub(crate) fn draw_all_avx512<const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer) {
+    draw_all::<Avx512, REVERSED, TIE>(zb);
 }
 
 /// `2^52 + 2^51` as the bits of an `f64`: for an integer `|n| < 2^51`, the `f64` with bits
@@ -269,8 +282,8 @@ fn lanes_avx2(mask: u32) -> __m256i {
 
 impl Avx2<'_> {
     /// Depth of 4 pixels from their unbiased `e1`, `e2`: `(z0 + e1 dz0) + e2 dz1` as
-    /// [`SetupTri::depth`], rounded to `f32`. Lanes of uncovered pixels may hold garbage (edge
-    /// values beyond 2^51); they are masked out by the caller.
+    /// [`SetupTri::depth`], rounded to `f32` (not yet clamped). Lanes of uncovered pixels may hold
+    /// garbage (edge values beyond 2^51); they are masked out by the caller.
     #[inline(always)]
     fn depth4(&self, e1: __m256i, e2: __m256i) -> __m128 {
         // SAFETY: see `Lanes`.
@@ -279,13 +292,45 @@ impl Avx2<'_> {
                 _mm256_add_pd(self.z0, _mm256_mul_pd(to_f64_avx2(e1), self.dz[0])),
                 _mm256_mul_pd(to_f64_avx2(e2), self.dz[1]),
             );
-            // `f64::clamp(0, 1)`: `max(0, d)` is `0 > d ? 0 : d` and `min(1, d)` is `1 < d ? 1 : d`
-            // (the first operand only when the comparison holds), which keeps -0.0 and NaN as
-            // `clamp` does.
-            let d = _mm256_min_pd(_mm256_set1_pd(1.0), _mm256_max_pd(_mm256_setzero_pd(), d));
             _mm256_cvtpd_ps(d)
         }
     }
+}
+
+/// `|x|` per lane (clears the sign bits).
+#[inline(always)]
+fn abs_ps(x: __m256) -> __m256 {
+    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
+    unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), x) }
+}
+
+/// Lane `j` set iff depths `d[j]` and `cur[j]` are a tie for the window `tie`:
+/// [`crate::zbuf::in_tie_window`] with the same `f32` operations, as a lane mask.
+///
+/// An empty standard-depth entry (`cur = +inf`) is excluded (for any finite `d` the formula
+/// gives `inf <= inf`): the fragment beats it either way (see [`wins`]), and as a tie it would
+/// go through the scalar path for every first fragment of a pixel.
+#[inline(always)]
+fn tie_window<const REVERSED: bool>(d: __m256, cur: __m256, tie: __m256) -> __m256 {
+    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
+    unsafe {
+        let diff = abs_ps(_mm256_sub_ps(d, cur));
+        let limit = _mm256_mul_ps(tie, _mm256_max_ps(abs_ps(d), abs_ps(cur)));
+        let in_window = _mm256_cmp_ps::<_CMP_LE_OQ>(diff, limit);
+        if REVERSED {
+            in_window
+        } else {
+            _mm256_and_ps(in_window, _mm256_cmp_ps::<_CMP_LT_OQ>(cur, _mm256_set1_ps(f32::INFINITY)))
+        }
+    }
+}
+
+/// `clamp_depth` per lane: `min(max(d, lo), hi)` with `d` as the first operand of each, which
+/// is [`crate::setup::clamp_depth`]'s comparisons exactly.
+#[inline(always)]
+fn clamp_ps(d: __m256, lo: __m256, hi: __m256) -> __m256 {
+    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
+    unsafe { _mm256_min_ps(_mm256_max_ps(d, lo), hi) }
 }
 
 /// The AVX2 backend: a row is two vectors of 4 `i64`.
@@ -300,6 +345,10 @@ struct Avx2<'t> {
     bias: [__m256i; 3],
     z0: __m256d,
     dz: [__m256d; 2],
+    /// The clamp range and the tie window, in every lane.
+    lo: __m256,
+    hi: __m256,
+    tie: __m256,
 }
 
 impl<'t> Lanes<'t> for Avx2<'t> {
@@ -311,8 +360,8 @@ impl<'t> Lanes<'t> for Avx2<'t> {
     const MAX_AREA: i64 = 1 << 51;
 
     #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns) -> Self {
-        let dz = tri.dz();
+    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+        let (dz, [lo, hi]) = (tri.dz(), tri.range());
         // SAFETY: see `Lanes`.
         unsafe {
             Self {
@@ -324,6 +373,9 @@ impl<'t> Lanes<'t> for Avx2<'t> {
                 bias: each(|i| _mm256_set1_epi64x(ef.bias[i])),
                 z0: _mm256_set1_pd(tri.z0()),
                 dz: [_mm256_set1_pd(dz[0]), _mm256_set1_pd(dz[1])],
+                lo: _mm256_set1_ps(lo),
+                hi: _mm256_set1_ps(hi),
+                tie: _mm256_set1_ps(tie),
             }
         }
     }
@@ -363,7 +415,7 @@ impl<'t> Lanes<'t> for Avx2<'t> {
     }
 
     #[inline(always)]
-    fn test_row<const REVERSED: bool>(
+    fn test_row<const REVERSED: bool, const TIE: bool>(
         &self,
         zb: &mut ZBuffer<'t>,
         k: usize,
@@ -374,6 +426,7 @@ impl<'t> Lanes<'t> for Avx2<'t> {
         // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
         unsafe {
             let d = _mm256_set_m128(self.depth4(e1[1], e2[1]), self.depth4(e1[0], e2[0]));
+            let d = clamp_ps(d, self.lo, self.hi);
 
             let covered = lanes_avx2(covered);
             let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
@@ -382,13 +435,24 @@ impl<'t> Lanes<'t> for Avx2<'t> {
             } else {
                 _mm256_cmp_ps::<_CMP_LT_OQ>(d, cur)
             });
-            let mut update = _mm256_and_si256(closer, covered);
-            let ties = _mm256_and_si256(_mm256_castps_si256(_mm256_cmp_ps::<_CMP_EQ_OQ>(d, cur)), covered);
+            // Lanes decided by the id: equal depths, or with `TIE` depths in the window (which
+            // the depth comparison then must not decide).
+            let tied = if TIE {
+                tie_window::<REVERSED>(d, cur, self.tie)
+            } else {
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(d, cur)
+            };
+            let ties = _mm256_and_si256(_mm256_castps_si256(tied), covered);
+            let mut update = if TIE {
+                _mm256_andnot_si256(ties, _mm256_and_si256(closer, covered))
+            } else {
+                _mm256_and_si256(closer, covered)
+            };
             let ties = _mm256_movemask_ps(_mm256_castsi256_ps(ties)) as u32;
             if ties != 0 {
                 let mut d_arr = [0.0f32; 8];
                 _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
-                let won = tie_winners::<REVERSED>(zb, k, self.tri, &d_arr, ties);
+                let won = tie_winners::<REVERSED, TIE>(zb, k, self.tri, &d_arr, ties);
                 update = _mm256_or_si256(update, lanes_avx2(won));
             }
             let update = _mm256_castsi256_ps(update);
@@ -415,6 +479,10 @@ struct Avx512<'t> {
     bias: [__m512i; 3],
     z0: __m512d,
     dz: [__m512d; 2],
+    /// The clamp range and the tie window, in every lane.
+    lo: __m256,
+    hi: __m256,
+    tie: __m256,
 }
 
 impl<'t> Lanes<'t> for Avx512<'t> {
@@ -422,8 +490,8 @@ impl<'t> Lanes<'t> for Avx512<'t> {
     const MAX_AREA: i64 = i64::MAX;
 
     #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns) -> Self {
-        let dz = tri.dz();
+    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+        let (dz, [lo, hi]) = (tri.dz(), tri.range());
         // SAFETY: see `Lanes`.
         unsafe {
             let j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
@@ -436,6 +504,9 @@ impl<'t> Lanes<'t> for Avx512<'t> {
                 bias: each(|i| _mm512_set1_epi64(ef.bias[i])),
                 z0: _mm512_set1_pd(tri.z0()),
                 dz: [_mm512_set1_pd(dz[0]), _mm512_set1_pd(dz[1])],
+                lo: _mm256_set1_ps(lo),
+                hi: _mm256_set1_ps(hi),
+                tie: _mm256_set1_ps(tie),
             }
         }
     }
@@ -469,7 +540,7 @@ impl<'t> Lanes<'t> for Avx512<'t> {
     }
 
     #[inline(always)]
-    fn test_row<const REVERSED: bool>(
+    fn test_row<const REVERSED: bool, const TIE: bool>(
         &self,
         zb: &mut ZBuffer<'t>,
         k: usize,
@@ -480,26 +551,31 @@ impl<'t> Lanes<'t> for Avx512<'t> {
         // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
         unsafe {
             // `(z0 + e1 dz0) + e2 dz1`, as `SetupTri::depth` (the conversions round like
-            // `as f64`), clamped as in the AVX2 backend.
+            // `as f64`), rounded and clamped as in the AVX2 backend.
             let d = _mm512_add_pd(
                 _mm512_add_pd(self.z0, _mm512_mul_pd(_mm512_cvtepi64_pd(e1), self.dz[0])),
                 _mm512_mul_pd(_mm512_cvtepi64_pd(e2), self.dz[1]),
             );
-            let d = _mm512_min_pd(_mm512_set1_pd(1.0), _mm512_max_pd(_mm512_setzero_pd(), d));
-            let d = _mm512_cvtpd_ps(d);
+            let d = clamp_ps(_mm512_cvtpd_ps(d), self.lo, self.hi);
 
             let covered = covered as __mmask8;
             let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
-            let mut update = if REVERSED {
+            let closer = if REVERSED {
                 _mm256_mask_cmp_ps_mask::<_CMP_GT_OQ>(covered, d, cur)
             } else {
                 _mm256_mask_cmp_ps_mask::<_CMP_LT_OQ>(covered, d, cur)
             };
-            let ties = _mm256_mask_cmp_ps_mask::<_CMP_EQ_OQ>(covered, d, cur);
+            // As in the AVX2 backend.
+            let (mut update, ties) = if TIE {
+                let ties = _mm256_movemask_ps(tie_window::<REVERSED>(d, cur, self.tie)) as __mmask8 & covered;
+                (closer & !ties, ties)
+            } else {
+                (closer, _mm256_mask_cmp_ps_mask::<_CMP_EQ_OQ>(covered, d, cur))
+            };
             if ties != 0 {
                 let mut d_arr = [0.0f32; 8];
                 _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
-                update |= tie_winners::<REVERSED>(zb, k, self.tri, &d_arr, u32::from(ties)) as __mmask8;
+                update |= tie_winners::<REVERSED, TIE>(zb, k, self.tri, &d_arr, u32::from(ties)) as __mmask8;
             }
             _mm256_mask_storeu_ps(row_of(&mut zb.depth, k).as_mut_ptr(), update, d);
             _mm256_mask_storeu_epi32(row_of(&mut zb.win, k).as_mut_ptr().cast(), update, self.idx);

@@ -20,6 +20,15 @@
 //! On x86-64 CPUs with AVX2 or AVX-512 (detected at run time), the coverage tests and the depth
 //! test work on rows of 8 pixels at once (`crate::simd`), computing exactly what the scalar kernel
 //! [`ZBuffer::draw_scalar`] computes.
+//!
+//! # Depth test and ties
+//!
+//! With a tie window `t = depth_tie > 0` ([`crate::RasterOptions::depth_tie`]), fragments whose
+//! depths are within `t` relative of each other are a tie, won by the smaller id ([`wins`]).
+//! This needs the id of the current winner, a load through its triangle index; the kernels
+//! therefore decide the (rare) ties separately, lane by lane, and the rest with vector
+//! comparisons. `depth_tie = 0` keeps the exact comparison, as a separate instance of every
+//! kernel (the const parameter `TIE`), so that it pays nothing for the window.
 
 use std::mem::MaybeUninit;
 
@@ -103,23 +112,66 @@ pub(crate) struct ZBuffer<'a> {
     pub win: Vec<u32>,
     /// The tile's triangles, in input order.
     pub tris: Vec<&'a SetupTri>,
+    /// The relative tie window, `> 0` (used by the kernels instantiated with `TIE = true` only).
+    pub tie: f32,
 }
 
-/// Whether fragment `(depth d, triangle tri)` replaces the z-buffer entry `(cur, win)`.
+/// Whether fragment `(depth d, triangle id)` replaces the z-buffer entry `(cur, win)`.
 ///
-/// Lexicographic (depth, id): a total order on fragments, so the surviving fragment is the same
-/// whatever order they arrive in. NaN never wins (comparisons are false). Equal (depth, id) keeps
-/// the earlier fragment: triangles arrive in input order. An empty entry has id [`EMPTY_ID`],
-/// which no set-up triangle has, so it loses every tie.
+/// Without `TIE`: lexicographic (depth, id), a total order on fragments, so the surviving
+/// fragment is the same whatever order they arrive in. NaN never wins (comparisons are false).
+/// Equal (depth, id) keeps the earlier fragment: triangles arrive in input order.
+///
+/// With `TIE` (window `tie > 0`): depths with `|d - cur| <= tie * max(|d|, |cur|)` (evaluated
+/// in `f32`, which [`in_tie_window`] and the vector kernels do identically) are a tie, won by the
+/// smaller id; otherwise the closer depth wins. Equal depths are always a tie, so this is the
+/// rule above with a wider notion of equality; but "within the window" is not transitive, so the
+/// survivor of three or more mutually close fragments can depend on their order (which is the
+/// input order, for any tiling and thread count).
+///
+/// An empty entry has id [`EMPTY_ID`], which no set-up triangle has, and depth `+inf` or `0`
+/// (reversed), so every fragment that is not NaN beats it, with either rule: it is closer, or a
+/// tie won on the id.
 #[inline(always)]
-pub(crate) fn wins<const REVERSED: bool>(d: f32, id: u32, cur: f32, win: u32, tris: &[&SetupTri]) -> bool {
+pub(crate) fn wins<const REVERSED: bool, const TIE: bool>(
+    d: f32,
+    id: u32,
+    cur: f32,
+    win: u32,
+    tris: &[&SetupTri],
+    tie: f32,
+) -> bool {
     let closer = if REVERSED { d > cur } else { d < cur };
-    closer || (d == cur && id < if win == NONE { EMPTY_ID } else { tris[win as usize].id })
+    let cur_id = || if win == NONE { EMPTY_ID } else { tris[win as usize].id };
+    if TIE {
+        if in_tie_window(d, cur, tie) { id < cur_id() } else { closer }
+    } else {
+        closer || (d == cur && id < cur_id())
+    }
+}
+
+/// `|d - cur| <= tie * max(|d|, |cur|)`: whether two depths are a tie for the window `tie`.
+///
+/// For reversed-Z depths `n / w` this is `|w - w'| <= tie * max(w, w')`, the relative distance
+/// along any ray, i.e. the tracer's tie rule. The vector kernels compute the same `f32`
+/// operations; only the boolean matters, so the choice between equal maxima (`+0` / `-0` cannot
+/// occur after `abs`) is irrelevant, and no operand is NaN (depths are clamped, see
+/// [`crate::setup::clamp_depth`]).
+#[inline(always)]
+pub(crate) fn in_tie_window(d: f32, cur: f32, tie: f32) -> bool {
+    (d - cur).abs() <= tie * d.abs().max(cur.abs())
 }
 
 impl<'a> ZBuffer<'a> {
-    fn reset(&mut self, rect: [u32; 4], empty_depth: f32, tris: impl Iterator<Item = &'a SetupTri>) {
+    fn reset(
+        &mut self,
+        rect: [u32; 4],
+        empty_depth: f32,
+        tie: f32,
+        tris: impl Iterator<Item = &'a SetupTri>,
+    ) {
         self.rect = rect;
+        self.tie = tie;
         self.w = (rect[2] - rect[0]) as usize;
         let len = self.w * (rect[3] - rect[1]) as usize + PAD;
         self.depth.clear();
@@ -134,26 +186,26 @@ impl<'a> ZBuffer<'a> {
     }
 
     /// Depth-tests every triangle of the tile.
-    fn draw_all<const REVERSED: bool>(&mut self, isa: Isa) {
+    fn draw_all<const REVERSED: bool, const TIE: bool>(&mut self, isa: Isa) {
         match isa {
-            Isa::Scalar => (0..self.tris.len() as u32).for_each(|i| self.draw_scalar::<REVERSED>(i)),
+            Isa::Scalar => (0..self.tris.len() as u32).for_each(|i| self.draw_scalar::<REVERSED, TIE>(i)),
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
-            Isa::Avx2 => unsafe { crate::simd::draw_all_avx2::<REVERSED>(self) },
+            Isa::Avx2 => unsafe { crate::simd::draw_all_avx2::<REVERSED, TIE>(self) },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
-            Isa::Avx512 => unsafe { crate::simd::draw_all_avx512::<REVERSED>(self) },
+            Isa::Avx512 => unsafe { crate::simd::draw_all_avx512::<REVERSED, TIE>(self) },
         }
     }
 
     /// Depth-tests every pixel of the tile covered by triangle `idx` of the tile list.
     #[inline(always)]
-    pub(crate) fn draw_scalar<const REVERSED: bool>(&mut self, idx: u32) {
+    pub(crate) fn draw_scalar<const REVERSED: bool, const TIE: bool>(&mut self, idx: u32) {
         let tri = self.tris[idx as usize];
         let [tx0, ty0, ..] = self.rect;
         let ef = EdgeFns::new(tri);
         let (sx1, sx2) = (ef.sx[1], ef.sx[2]);
-        let w = self.w;
+        let (w, tie) = (self.w, self.tie);
         let (depth, win, tris) = (&mut self.depth, &mut self.win, &self.tris);
         let rect = clip_to_tile(self.rect, tri.bbox);
         cover_rect(
@@ -168,7 +220,7 @@ impl<'a> ZBuffer<'a> {
                 for j in 0..n {
                     if mask >> j & 1 != 0 {
                         let d = tri.depth([0, e1, e2]);
-                        if wins::<REVERSED>(d, tri.id, depth[j], win[j], tris) {
+                        if wins::<REVERSED, TIE>(d, tri.id, depth[j], win[j], tris, tie) {
                             depth[j] = d;
                             win[j] = idx;
                         }
@@ -227,8 +279,9 @@ fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [MaybeUnini
     }
 }
 
-/// Renders the binned triangles into a new [`Target`] with the given kernel.
-pub(crate) fn render(binned: &Binned, reversed: bool, isa: Isa) -> Target {
+/// Renders the binned triangles into a new [`Target`] with the given kernel and relative depth
+/// tie window (`<= 0` or NaN: exact comparisons).
+pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, isa: Isa) -> Target {
     let grid = binned.grid;
     let len = grid.width as usize * grid.height as usize;
     let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
@@ -249,11 +302,13 @@ pub(crate) fn render(binned: &Binned, reversed: bool, isa: Isa) -> Target {
                 bary.into_iter().flatten().for_each(|b| _ = b.write([0.0; 2]));
                 return;
             }
-            zb.reset(grid.rect(t), empty_depth, binned.tile(t));
-            if reversed {
-                zb.draw_all::<true>(isa);
-            } else {
-                zb.draw_all::<false>(isa);
+            zb.reset(grid.rect(t), empty_depth, tie, binned.tile(t));
+            // `!(tie > 0)` includes NaN.
+            match (reversed, tie > 0.0) {
+                (false, false) => zb.draw_all::<false, false>(isa),
+                (false, true) => zb.draw_all::<false, true>(isa),
+                (true, false) => zb.draw_all::<true, false>(isa),
+                (true, true) => zb.draw_all::<true, true>(isa),
             }
             zb.resolve(depth, id, bary);
         },
@@ -291,7 +346,8 @@ mod tests {
 
     /// Triangles of every size class the kernels treat differently: sub-pixel, a few pixels, 8x8
     /// blocks, tile-filling, guard-band sized (edge values beyond 2^51), crossing the near plane,
-    /// plus exact duplicates and coplanar overlaps with other ids (depth ties).
+    /// plus exact duplicates and coplanar overlaps with other ids (depth ties), and copies moved
+    /// by ~1e-6 relative in depth (ties within a window only).
     fn scene() -> (Vec<[Vec4; 3]>, Vec<u32>) {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         let mut tris = Vec::new();
@@ -316,17 +372,21 @@ mod tests {
             [p(x0, -0.8), p(x1, -0.8), p(x0, 0.8)]
         };
         tris.extend([quad(-0.9, 0.3), quad(-0.5, 0.9)]);
+        for i in (3..1000).step_by(25) {
+            let moved = tris[i].map(|v| Vec4::new(v.x, v.y, v.z * (1.0 + 1e-6 * (1.0 + rng.f32())), v.w));
+            tris.push(moved);
+        }
         // Ids in scrambled order (so that ties go either way) and a few repeated ones.
         let n = tris.len() as u64;
         let ids = (0..n).map(|i| if i % 11 == 3 { 5 } else { (i * 7919 % n) as u32 }).collect();
         (tris, ids)
     }
 
-    fn render_with(isa: Isa, tris: &[[Vec4; 3]], ids: &[u32], reversed: bool, tile: u32) -> Target {
+    fn render_with(isa: Isa, tris: &[[Vec4; 3]], ids: &[u32], reversed: bool, tie: f32, tile: u32) -> Target {
         let (width, height) = (203, 157);
         let ctx = SetupContext::new(width, height, false);
         let binned = Binned::new(tris, Some(ids), &ctx, tile);
-        render(&binned, reversed, isa)
+        render(&binned, reversed, tie, isa)
     }
 
     fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
@@ -337,19 +397,30 @@ mod tests {
         )
     }
 
+    /// Every kernel gives the scalar kernel's buffers bit for bit, in both depth conventions,
+    /// for two tile sizes, without a tie window, with the renderer's `2^-16` and with a wide one
+    /// (`1e-2`: many random overlaps become ties, so the per-lane tie path runs a lot).
     #[test]
     fn every_kernel_gives_identical_buffers() {
         let (tris, ids) = scene();
         let isas = Isa::available();
         assert_eq!(isas.first().copied(), Some(Isa::detect()));
         for reversed in [false, true] {
-            for tile in [8, 64] {
-                let reference = render_with(Isa::Scalar, &tris, &ids, reversed, tile);
-                assert!(reference.id.iter().filter(|&&id| id != EMPTY_ID).count() > 10_000);
-                let reference = bits(&reference);
-                for &isa in &isas {
-                    let t = render_with(isa, &tris, &ids, reversed, tile);
-                    assert!(bits(&t) == reference, "{isa:?}, reversed {reversed}, tile {tile}");
+            let exact = bits(&render_with(Isa::Scalar, &tris, &ids, reversed, 0.0, 64));
+            for tie in [0.0, 1.0 / 65536.0, 1e-2] {
+                for tile in [8, 64] {
+                    let reference = render_with(Isa::Scalar, &tris, &ids, reversed, tie, tile);
+                    assert!(reference.id.iter().filter(|&&id| id != EMPTY_ID).count() > 10_000);
+                    let reference = bits(&reference);
+                    // Not vacuous: the window changes some winners.
+                    assert_eq!(tie == 0.0, reference.1 == exact.1, "tie {tie}, reversed {reversed}");
+                    for &isa in &isas {
+                        let t = render_with(isa, &tris, &ids, reversed, tie, tile);
+                        assert!(
+                            bits(&t) == reference,
+                            "{isa:?}, reversed {reversed}, tie {tie}, tile {tile}"
+                        );
+                    }
                 }
             }
         }

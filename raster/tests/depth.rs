@@ -1,5 +1,6 @@
 //! Depth test and tie-breaking: the nearer fragment wins; at equal depth the smaller id wins,
-//! whatever the order of the triangles.
+//! whatever the order of the triangles; with a tie window (`RasterOptions::depth_tie`), depths
+//! within the window count as equal.
 
 mod common;
 
@@ -131,4 +132,46 @@ fn reversed_z_empty_pixels_hold_zero() {
     let t = rasterize(&[], &[], 4, 3, &opts);
     assert!(t.depth.iter().all(|&d| d == hyrt_raster::EMPTY_DEPTH_REVERSED));
     assert!(t.id.iter().all(|&i| i == EMPTY_ID));
+}
+
+/// Two parallel full-screen quads at view depths `d` and `d * (1 + gap)`, the farther one with
+/// the smaller id (1, the nearer 2), drawn in both orders with the tie window `depth_tie`: the
+/// ids seen (every pixel must be covered, and by the same id in both orders).
+fn parallel_quads(reversed: bool, gap: f64, depth_tie: f32) -> u32 {
+    // Standard depth `z/w = f/(f-n) (1 - n/w)` must resolve the gap with `depth_tie = 0`: a near
+    // plane at 0.6 of the distance makes the relative change of z/w 1.5 times the gap (14 f32
+    // ulps for 1e-6) rather than 1e-4 times it. Reversed-Z resolves it at any near distance.
+    let (n, f) = if reversed { (0.1, 1000.0) } else { (60.0, 200.0) };
+    let near_d = 100.0f32;
+    let far_d = (100.0 * (1.0 + gap)) as f32;
+    assert!(far_d > near_d);
+    let far = quad_at(far_d, n, f, reversed).map(|t| (t, 1));
+    let near = quad_at(near_d, n, f, reversed).map(|t| (t, 2));
+    let opts = RasterOptions { reversed_z: reversed, depth_tie, ..Default::default() };
+    let run = |items: Vec<([Vec4; 3], u32)>| {
+        let tris: Vec<[Vec4; 3]> = items.iter().map(|i| i.0).collect();
+        let ids: Vec<u32> = items.iter().map(|i| i.1).collect();
+        rasterize(&tris, &ids, W, H, &opts)
+    };
+    let far_first = run(far.iter().chain(&near).copied().collect());
+    let near_first = run(near.iter().chain(&far).copied().collect());
+    assert_eq!(far_first, near_first, "reversed {reversed}, gap {gap}, tie {depth_tie}");
+    let id = far_first.id[0];
+    assert!(id != EMPTY_ID && far_first.id.iter().all(|&i| i == id), "reversed {reversed}, gap {gap}");
+    id
+}
+
+/// The tie window, at view depth 100, in both depth conventions: surfaces 1e-6 apart (relative)
+/// are a tie for `depth_tie = 2^-16` (the smaller id, the farther surface, wins on every pixel)
+/// and resolved exactly with `0` (the nearer wins on every pixel); surfaces 1e-3 apart are never a
+/// tie (the nearer wins with either setting).
+#[test]
+fn tie_window_gives_close_surfaces_to_the_smaller_id_and_keeps_distinct_ones_apart() {
+    const TIE: f32 = 1.0 / 65536.0;
+    for reversed in [false, true] {
+        assert_eq!(parallel_quads(reversed, 1e-6, TIE), 1, "reversed {reversed}: a tie");
+        assert_eq!(parallel_quads(reversed, 1e-6, 0.0), 2, "reversed {reversed}: exact");
+        assert_eq!(parallel_quads(reversed, 1e-3, TIE), 2, "reversed {reversed}: no tie");
+        assert_eq!(parallel_quads(reversed, 1e-3, 0.0), 2, "reversed {reversed}: exact");
+    }
 }

@@ -1,5 +1,5 @@
-//! Determinism: the buffers are byte-identical for any number of threads, any tile size and any
-//! triangle order (unique ids).
+//! Determinism: the buffers are byte-identical for any number of threads and any tile size, with
+//! or without a depth tie window, and for any triangle order (unique ids) without one.
 
 mod common;
 
@@ -7,12 +7,19 @@ use common::{Camera, Rng, uv_sphere};
 use glam::{DMat3, DVec3, Vec4};
 use hyrt_raster::{RasterOptions, Target, rasterize};
 
+/// The renderer's tie window, and a wide one under which many random overlaps tie.
+const TIES: [f32; 2] = [1.0 / 65536.0, 1e-2];
+
 /// A scene with many depth conflicts: a 20k-triangle sphere, an interpenetrating floor, a huge
-/// triangle passing behind the camera, and 2000 random overlapping triangles.
+/// triangle passing behind the camera, 2000 random overlapping triangles, and copies of 500
+/// sphere triangles with other ids, pushed out by ~1e-6 relative (ties within the windows only).
 fn scene() -> (Camera, Vec<[Vec4; 3]>, Vec<u32>) {
     let cam = Camera::new(DVec3::new(0.4, 0.8, 3.0), DVec3::ZERO, DVec3::Y, 55.0, 0.1, 50.0, 333, 251);
     let (verts, idx) = uv_sphere(DVec3::ZERO, 1.0, 128, 80, DMat3::from_rotation_y(0.4));
     let mut tris = cam.clip_tris(&verts, &idx);
+    let pushed: Vec<DVec3> = verts.iter().map(|&v| v * (1.0 + 1e-6)).collect();
+    let copies = cam.clip_tris(&pushed, &idx[..]);
+    tris.extend(copies.iter().step_by(idx.len() / 500).copied());
     let floor = |x: f64, z: f64| cam.clip(DVec3::new(x, -0.3, z));
     tris.push([floor(-50.0, 50.0), floor(50.0, 50.0), floor(0.0, -50.0)]);
     let mut rng = Rng(99);
@@ -35,33 +42,66 @@ fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
     )
 }
 
-fn render_with_threads(n: usize, tris: &[[Vec4; 3]], ids: &[u32], cam: &Camera) -> Target {
+fn render_with_threads(
+    n: usize,
+    tris: &[[Vec4; 3]],
+    ids: &[u32],
+    cam: &Camera,
+    opts: &RasterOptions,
+) -> Target {
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
         .unwrap()
-        .install(|| rasterize(tris, ids, cam.width, cam.height, &RasterOptions::default()))
+        .install(|| rasterize(tris, ids, cam.width, cam.height, opts))
 }
 
 #[test]
 fn identical_for_one_two_and_three_threads() {
     let (cam, tris, ids) = scene();
-    let reference = bits(&render_with_threads(1, &tris, &ids, &cam));
+    let reference = bits(&render_with_threads(1, &tris, &ids, &cam, &RasterOptions::default()));
     for n in [2, 3] {
-        assert!(bits(&render_with_threads(n, &tris, &ids, &cam)) == reference, "{n} threads");
+        let t = render_with_threads(n, &tris, &ids, &cam, &RasterOptions::default());
+        assert!(bits(&t) == reference, "{n} threads");
+    }
+}
+
+/// With a tie window the survivor of mutually close fragments depends on their order; that order
+/// is the input order in every tile, whatever the threads: still byte-identical. In both depth
+/// conventions.
+#[test]
+fn identical_for_one_two_and_three_threads_with_a_tie_window() {
+    let (cam, tris, ids) = scene();
+    for reversed_z in [false, true] {
+        let exact = RasterOptions { reversed_z, ..Default::default() };
+        let exact = render_with_threads(1, &tris, &ids, &cam, &exact);
+        for depth_tie in TIES {
+            let opts = RasterOptions { reversed_z, depth_tie, ..Default::default() };
+            let reference = render_with_threads(1, &tris, &ids, &cam, &opts);
+            // Not vacuous: the window changes winners.
+            assert!(reference.id != exact.id, "tie {depth_tie}");
+            let reference = bits(&reference);
+            for n in [2, 3] {
+                let t = render_with_threads(n, &tris, &ids, &cam, &opts);
+                assert!(bits(&t) == reference, "{n} threads, tie {depth_tie}, reversed {reversed_z}");
+            }
+        }
     }
 }
 
 #[test]
 fn identical_for_any_tile_size() {
     let (cam, tris, ids) = scene();
-    let reference = bits(&rasterize(&tris, &ids, cam.width, cam.height, &RasterOptions::default()));
-    for tile_size in [8, 16, 40, 128, 4096] {
-        let opts = RasterOptions { tile_size, cull_backfaces: false, reversed_z: false };
-        assert!(
-            bits(&rasterize(&tris, &ids, cam.width, cam.height, &opts)) == reference,
-            "tile size {tile_size}"
-        );
+    for depth_tie in [0.0, TIES[0], TIES[1]] {
+        let opts = RasterOptions { depth_tie, ..Default::default() };
+        let reference = bits(&rasterize(&tris, &ids, cam.width, cam.height, &opts));
+        for tile_size in [8, 16, 40, 128, 4096] {
+            let opts = RasterOptions { tile_size, ..opts };
+            assert!(
+                bits(&rasterize(&tris, &ids, cam.width, cam.height, &opts)) == reference,
+                "tile size {tile_size}, tie {depth_tie}"
+            );
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 //! `rasterize` against a straightforward reference z-buffer built from `for_each_fragment`: every
-//! fragment depth-tested in input order with the documented rule, its barycentrics stored when it
-//! wins. `rasterize` defers barycentrics to the winners and runs vector kernels; the buffers must
-//! be bit-identical anyway.
+//! fragment depth-tested in input order with the documented rule (with and without a tie window),
+//! its barycentrics stored when it wins. `rasterize` defers barycentrics to the winners and runs
+//! vector kernels; the buffers must be bit-identical anyway.
 
 mod common;
 
@@ -22,7 +22,13 @@ fn reference(tris: &[[Vec4; 3]], ids: &[u32], w: u32, h: u32, opts: &RasterOptio
             let i = t.index(f.x, f.y);
             let cur = t.depth[i];
             let closer = if opts.reversed_z { f.depth > cur } else { f.depth < cur };
-            if closer || (f.depth == cur && id < t.id[i]) {
+            // The documented rule, straight from `RasterOptions::depth_tie`.
+            let tie = if opts.depth_tie > 0.0 {
+                (f.depth - cur).abs() <= opts.depth_tie * f.depth.abs().max(cur.abs())
+            } else {
+                f.depth == cur
+            };
+            if if tie { id < t.id[i] } else { closer } {
                 t.depth[i] = f.depth;
                 t.id[i] = id;
                 t.bary[i] = f.bary;
@@ -41,7 +47,7 @@ fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
 }
 
 /// A sphere, an interpenetrating floor passing behind the camera, random overlapping triangles
-/// of all sizes, and duplicates (depth ties).
+/// of all sizes, duplicates (depth ties), and copies moved by ~1e-6 relative (ties in a window).
 fn scene(cam: &Camera) -> (Vec<[Vec4; 3]>, Vec<u32>) {
     let (verts, idx) = uv_sphere(DVec3::ZERO, 1.0, 96, 60, DMat3::from_rotation_y(0.3));
     let mut tris = cam.clip_tris(&verts, &idx);
@@ -56,6 +62,9 @@ fn scene(cam: &Camera) -> (Vec<[Vec4; 3]>, Vec<u32>) {
     }
     for i in (0..2000).step_by(13) {
         tris.push(tris[i]);
+    }
+    for i in (0..2000).step_by(7) {
+        tris.push(tris[i].map(|v| v * (1.0 + 1e-6 * (1.0 + i as f32 / 2000.0))));
     }
     // Ids in scrambled order (ties go either way), some repeated, some empty.
     let n = tris.len() as u64;
@@ -75,12 +84,14 @@ fn rasterize_matches_the_fragment_reference() {
     let (tris, ids) = scene(&cam);
     for reversed_z in [false, true] {
         for (tile_size, cull_backfaces) in [(64, false), (16, true)] {
-            let opts = RasterOptions { tile_size, cull_backfaces, reversed_z };
-            let expected = reference(&tris, &ids, cam.width, cam.height, &opts);
-            let covered = expected.id.iter().filter(|&&id| id != EMPTY_ID).count();
-            assert!(covered > 20_000, "{covered} covered pixels");
-            let got = rasterize(&tris, &ids, cam.width, cam.height, &opts);
-            assert!(bits(&got) == bits(&expected), "{opts:?}");
+            for depth_tie in [0.0, 1.0 / 65536.0, 1e-2] {
+                let opts = RasterOptions { tile_size, cull_backfaces, reversed_z, depth_tie };
+                let expected = reference(&tris, &ids, cam.width, cam.height, &opts);
+                let covered = expected.id.iter().filter(|&&id| id != EMPTY_ID).count();
+                assert!(covered > 20_000, "{covered} covered pixels");
+                let got = rasterize(&tris, &ids, cam.width, cam.height, &opts);
+                assert!(bits(&got) == bits(&expected), "{opts:?}");
+            }
         }
     }
 }

@@ -12,7 +12,8 @@ use hyrt_raster::{
     rasterize,
 };
 
-const TWO_SIDED: RasterOptions = RasterOptions { tile_size: 64, cull_backfaces: false, reversed_z: false };
+const TWO_SIDED: RasterOptions =
+    RasterOptions { tile_size: 64, cull_backfaces: false, reversed_z: false, depth_tie: 0.0 };
 
 /// Every buffer has the right size; a pixel is either empty (id EMPTY_ID, depth EMPTY_DEPTH,
 /// bary 0) or holds a known id, a depth in [0, 1] and finite barycentrics.
@@ -93,7 +94,10 @@ fn extreme_coordinates_never_panic_or_escape_the_buffer() {
     let ids: Vec<u32> = (0..tris.len() as u32).collect();
     let mut drawn = 0;
     for (w, h) in [(1, 1), (7, 3), (64, 64), (100, 37), (129, 65)] {
-        for opts in [TWO_SIDED, RasterOptions { tile_size: 8, cull_backfaces: true, reversed_z: false }] {
+        let culled = RasterOptions { tile_size: 8, cull_backfaces: true, ..TWO_SIDED };
+        // A wide tie window: many of these overlapping triangles tie.
+        let tied = RasterOptions { depth_tie: 1e-3, ..TWO_SIDED };
+        for opts in [TWO_SIDED, culled, tied] {
             let t = rasterize(&tris, &ids, w, h, &opts);
             assert_valid(&t, tris.len());
             drawn += t.id.iter().filter(|&&id| id != EMPTY_ID).count();

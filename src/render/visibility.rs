@@ -41,7 +41,12 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
             stats.time_ms.insert("vis_transform", super::ms(t));
 
             let t = Instant::now();
-            let opts = RasterOptions { reversed_z: true, ..RasterOptions::default() };
+            // The tracer's tie rule, so coplanar duplicates resolve alike in both strategies.
+            let opts = RasterOptions {
+                reversed_z: true,
+                depth_tie: hyrt_tracer::DEPTH_TIE,
+                ..RasterOptions::default()
+            };
             let target = rasterize(&clip, &ids, w, h, &opts);
             stats.time_ms.insert("vis_raster", super::ms(t));
 

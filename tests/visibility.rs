@@ -1,0 +1,210 @@
+//! Rasterized primary visibility against ray casting, on the thesis scenes at 640x480.
+//!
+//! Bound: the rasterized triangle id equals the ray-cast id on at least 99.9 % of pixels, and
+//! every pixel where they differ is explained as one of
+//! - an **edge**: an edge of one of the two triangles passes within 1/16 pixel of the pixel
+//!   centre (the rasterizer snaps vertices to 1/256 pixel and applies the top-left rule; the ray
+//!   test is exact in world space: they may disagree about centres that close to an edge), or
+//! - a **depth tie**: the pixel's camera ray hits both triangles at distances within the
+//!   tracer's tie window (`hyrt_tracer::DEPTH_TIE`), where the rule "smaller id wins" applies
+//!   and either answer is right up to rounding.
+
+mod common;
+
+use common::*;
+use hyrt::{
+    film::Film,
+    render::{Options, Renderer, Visibility},
+    scene::Scene,
+};
+use hyrt_tracer::Hit;
+
+struct Agreement {
+    pixels: usize,
+    differ: usize,
+    edges: usize,
+    ties: usize,
+    unexplained: Vec<String>,
+}
+
+fn id(h: &Option<Hit>) -> u32 {
+    h.map_or(u32::MAX, |h| h.tri)
+}
+
+fn agreement(scene: &Scene) -> (Agreement, Vec<Option<Hit>>, Vec<Option<Hit>>, Renderer<'_>) {
+    let rays = Renderer::new(scene, Options { visibility: Visibility::Rays, ..Options::default() });
+    let raster = Renderer::new(scene, Options { visibility: Visibility::Raster, ..Options::default() });
+    let (g_rays, st_rays) = rays.visibility();
+    let (g_raster, st_raster) = raster.visibility();
+    assert_eq!(st_raster.rays.primary, 0);
+    let (w, h) = (scene.settings.width as i64, scene.settings.height as i64);
+    assert_eq!(st_rays.rays.primary, (w * h) as u64);
+    let mut a = Agreement { pixels: (w * h) as usize, differ: 0, edges: 0, ties: 0, unexplained: vec![] };
+    let ray_at = |fx: f32, fy: f32| {
+        hyrt_tracer::Ray::new(rays.camera.eye, rays.camera.direction_at(fx, fy).normalize(), f32::INFINITY)
+    };
+    // Does an edge of `tri` pass within `EDGE_PX` of the centre of pixel (x, y)? Measured in
+    // f64 on the film: the distance from the centre to the projected triangle's boundary.
+    // Triangles reaching behind the camera plane have no such projection; for them, rays
+    // through the centre and a ring of 16 points at that distance must disagree about being
+    // inside.
+    const EDGE_PX: f32 = 1.0 / 16.0;
+    let cam = rays.camera;
+    let (w_px, h_px) = (w as f64, h as f64);
+    let film = |q: glam::Vec3| {
+        let v = (q - cam.eye).as_dvec3();
+        let w = v.dot(cam.forward.as_dvec3());
+        let x = v.dot(cam.right.as_dvec3()) / cam.tan_x as f64 / w;
+        let y = v.dot(cam.up.as_dvec3()) / cam.tan_y as f64 / w;
+        (glam::DVec2::new((x + 1.0) * 0.5 * w_px, (1.0 - y) * 0.5 * h_px), w)
+    };
+    let at_edge = |x: i64, y: i64, tri: u32| {
+        let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+        let v = scene.positions[tri as usize].map(film);
+        if v.iter().all(|(_, w)| *w > 0.0) {
+            let c = glam::DVec2::new(cx as f64, cy as f64);
+            let dist = (0..3)
+                .map(|i| {
+                    let (a, b) = (v[i].0, v[(i + 1) % 3].0);
+                    let t = ((c - a).dot(b - a) / (b - a).length_squared().max(1e-300)).clamp(0.0, 1.0);
+                    (a + (b - a) * t - c).length()
+                })
+                .fold(f64::INFINITY, f64::min);
+            return dist <= EDGE_PX as f64;
+        }
+        let inside_centre = rays.tracer.hits_triangle(tri, &ray_at(cx, cy)).is_some();
+        (0..16).any(|k| {
+            let a = k as f32 * std::f32::consts::TAU / 16.0;
+            let r = ray_at(cx + EDGE_PX * a.cos(), cy + EDGE_PX * a.sin());
+            rays.tracer.hits_triangle(tri, &r).is_some() != inside_centre
+        })
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let (r, z) = (id(&g_rays[i]), id(&g_raster[i]));
+            if r == z {
+                continue;
+            }
+            a.differ += 1;
+            if (r != u32::MAX && at_edge(x, y, r)) || (z != u32::MAX && at_edge(x, y, z)) {
+                a.edges += 1;
+                continue;
+            }
+            let ray = rays.camera_ray(x as u32, y as u32);
+            let t = |tri: u32| rays.tracer.hits_triangle(tri, &ray).map(|h| h.t);
+            if let (Some(tr), Some(tz)) = (t(r), t(z))
+                && hyrt_tracer::depth_tie(tr, tz)
+            {
+                a.ties += 1;
+                continue;
+            }
+            let (tr, tz) = (t(r), t(z));
+            a.unexplained.push(format!("pixel ({x},{y}): rays see {r} at {tr:?}, raster sees {z} at {tz:?}"));
+        }
+    }
+    drop(raster);
+    (a, g_rays, g_raster, rays)
+}
+
+fn check_scene(file: &str) -> (Agreement, Scene) {
+    let mut scene = hyrt::scene::load(root().join("scenes").join(file).to_str().unwrap()).unwrap();
+    scene.settings.width = 640;
+    scene.settings.height = 480;
+    let (a, ..) = agreement(&scene);
+    let frac = 1.0 - a.differ as f64 / a.pixels as f64;
+    eprintln!(
+        "{file}: {} of {} pixels differ ({} edges, {} depth ties)",
+        a.differ, a.pixels, a.edges, a.ties
+    );
+    assert!(frac >= 0.999, "{file}: only {:.4} % of pixels agree", frac * 100.0);
+    assert!(a.unexplained.is_empty(), "{file}: unexplained disagreements:\n{}", a.unexplained.join("\n"));
+    (a, scene)
+}
+
+#[test]
+fn raster_ids_match_ray_cast_ids_on_cornell_bunny_mirror() {
+    check_scene("cornell-bunny-mirror.toml");
+}
+
+#[test]
+fn raster_ids_match_ray_cast_ids_on_office() {
+    check_scene("office.toml");
+}
+
+/// The conference room is closed around the camera, and its ceiling is a few huge triangles
+/// that pass behind the camera: the near-plane clipper must draw them, with no hole and no
+/// triangle missing or inverted.
+#[test]
+fn raster_ids_match_ray_cast_ids_on_conference_including_the_clipped_ceiling() {
+    let mut scene = hyrt::scene::load(root().join("scenes/conference.toml").to_str().unwrap()).unwrap();
+    scene.settings.width = 640;
+    scene.settings.height = 480;
+    let (a, g_rays, g_raster, rays) = agreement(&scene);
+    eprintln!(
+        "conference: {} of {} pixels differ ({} edges, {} depth ties)",
+        a.differ, a.pixels, a.edges, a.ties
+    );
+    assert!(a.unexplained.is_empty(), "unexplained disagreements:\n{}", a.unexplained.join("\n"));
+    assert!(a.differ as f64 <= 0.001 * a.pixels as f64, "{} pixels differ", a.differ);
+    // Every pixel sees something in a closed room, with either strategy.
+    assert!(g_rays.iter().all(Option::is_some), "the ray-cast image has holes");
+    assert_eq!(g_raster.iter().filter(|h| h.is_none()).count(), 0, "the rasterized image has holes");
+    // Triangles with a vertex behind the camera plane: they need clipping.
+    let cam = rays.camera;
+    let behind =
+        |tri: u32| scene.positions[tri as usize].iter().any(|p| (*p - cam.eye).dot(cam.forward) <= 0.0);
+    let clipped_px = g_rays.iter().filter(|h| h.is_some_and(|h| behind(h.tri))).count();
+    let same = g_rays
+        .iter()
+        .zip(&g_raster)
+        .filter(|(r, z)| r.is_some_and(|r| behind(r.tri)) && id(r) == id(z))
+        .count();
+    assert!(clipped_px > 10_000, "the test should see clipped triangles: {clipped_px} pixels");
+    assert!(same as f64 >= 0.999 * clipped_px as f64, "{same} of {clipped_px} clipped-triangle pixels agree");
+}
+
+/// Where both strategies see the same triangle, the hit (and so all shading) is bit-identical.
+#[test]
+fn raster_hits_are_bit_identical_where_the_triangle_agrees() {
+    let scene = hyrt::scene::load("cornell").unwrap();
+    let rays = Renderer::new(&scene, Options::default());
+    let raster = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
+    let (a, b) = (rays.visibility().0, raster.visibility().0);
+    let same = a.iter().zip(&b).filter(|(x, y)| id(x) == id(y) && x.is_some()).count();
+    let identical = a.iter().zip(&b).filter(|(x, y)| id(x) == id(y) && x.is_some() && x == y).count();
+    assert!(same > 200_000);
+    assert_eq!(identical, same);
+}
+
+#[test]
+fn raster_visibility_casts_no_primary_rays_and_times_its_pass() {
+    let mut scene = hyrt::scene::load("cornell").unwrap();
+    scene.settings.width = 80;
+    scene.settings.height = 60;
+    let f = render(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
+    assert_eq!(f.stats.rays.primary, 0);
+    assert!(f.stats.time_ms.contains_key("visibility"));
+    let reference = render(&scene, Options::default());
+    // Same shading wherever the triangle agrees: the images are nearly identical.
+    let c = hyrt::metrics::compare(
+        &hyrt::metrics::DisplayImage::from_film(&reference.film, 1.0),
+        &hyrt::metrics::DisplayImage::from_film(&f.film, 1.0),
+    )
+    .unwrap();
+    assert!(c.psnr_db >= 40.0, "{c:?}");
+}
+
+#[test]
+fn raster_visibility_is_the_same_for_one_and_two_threads() {
+    let mut scene = hyrt::scene::load("cornell").unwrap();
+    scene.settings.width = 160;
+    scene.settings.height = 120;
+    let run =
+        |n| -> Film {
+            rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(|| {
+                render(&scene, Options { visibility: Visibility::Raster, ..Options::default() }).film
+            })
+        };
+    assert!(run(1).pixels == run(2).pixels);
+}

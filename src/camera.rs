@@ -23,6 +23,9 @@ pub struct CameraRays {
     /// `2 / width` and `2 / height`: products instead of a division per pixel.
     pub two_over_w: f32,
     pub two_over_h: f32,
+    /// `1 / tan_x` and `1 / tan_y`, for projecting points.
+    pub inv_tan_x: f32,
+    pub inv_tan_y: f32,
 }
 
 impl CameraRays {
@@ -47,6 +50,8 @@ impl CameraRays {
             height,
             two_over_w: 2.0 / width as f32,
             two_over_h: 2.0 / height as f32,
+            inv_tan_x: 1.0 / tan_x,
+            inv_tan_y: 1.0 / tan_y,
         }
     }
 

@@ -96,5 +96,7 @@ pub(crate) fn near_plane(scene: &crate::scene::Scene, camera: &CameraRays) -> f3
 #[inline]
 pub fn to_clip(cam: &CameraRays, near: f32, p: glam::Vec3) -> Vec4 {
     let v = p - cam.eye;
-    Vec4::new(v.dot(cam.right) / cam.tan_x, v.dot(cam.up) / cam.tan_y, near, v.dot(cam.forward))
+    // Products with precomputed reciprocals: the rasterizer's coverage and exact-depth plane
+    // are both relative to these clip coordinates, so their rounding needs no match elsewhere.
+    Vec4::new(v.dot(cam.right) * cam.inv_tan_x, v.dot(cam.up) * cam.inv_tan_y, near, v.dot(cam.forward))
 }

@@ -6,29 +6,16 @@
 //! warm-up frame each. Scenes: `HYRT_BENCH_SCENES` (comma-separated scene files), default the
 //! thesis's cornell-bunny-mirror, conference and office.
 
+mod common;
+
 use std::time::Instant;
+
+use common::{frames, load_640x480, median, scenes};
 
 use hyrt::render::{Options, Renderer};
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-}
-
 fn main() {
-    // `cargo bench` passes `--bench`; any other argument filters scenes by name.
-    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
-    let frames: usize = std::env::var("HYRT_BENCH_FRAMES").ok().and_then(|s| s.parse().ok()).unwrap_or(7);
-    let root = env!("CARGO_MANIFEST_DIR");
-    let scenes: Vec<String> = std::env::var("HYRT_BENCH_SCENES")
-        .map(|s| s.split(',').map(String::from).collect())
-        .unwrap_or_else(|_| {
-            ["cornell-bunny-mirror", "conference", "office"]
-                .iter()
-                .map(|s| format!("{root}/scenes/{s}.toml"))
-                .collect()
-        });
+    let frames = frames(7);
     let pools: Vec<(usize, rayon::ThreadPool)> = [1, 2]
         .iter()
         .map(|&n| (n, rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()))
@@ -37,19 +24,8 @@ fn main() {
     println!("reference (Whitted) at 640x480, median of {frames} frames, threads alternated per frame\n");
     println!("| scene | triangles | BVH build ms | threads | frame ms | rays/frame | M rays/s | speed-up |");
     println!("|---|---:|---:|---:|---:|---:|---:|---:|");
-    for spec in &scenes {
-        if !filter.is_empty() && !filter.iter().any(|f| spec.contains(f.as_str())) {
-            continue;
-        }
-        let mut scene = match hyrt::scene::load(spec) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("skipping {spec}: {e:#}");
-                continue;
-            }
-        };
-        scene.settings.width = 640;
-        scene.settings.height = 480;
+    for spec in scenes() {
+        let Some(scene) = load_640x480(&spec) else { continue };
         let renderer = Renderer::new(&scene, Options::default());
         let mut times = vec![Vec::new(); pools.len()];
         let mut rays = 0;

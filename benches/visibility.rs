@@ -10,30 +10,16 @@
 //!
 //! Threads: all cores (`RAYON_NUM_THREADS` to change). Scenes: `HYRT_BENCH_SCENES`.
 
+mod common;
+
 use std::time::Instant;
+
+use common::{frames, load_640x480, median, scenes};
 
 use hyrt::render::{Options, Renderer, Visibility};
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-}
-
 fn main() {
-    let frames: usize = std::env::var("HYRT_BENCH_FRAMES").ok().and_then(|s| s.parse().ok()).unwrap_or(15);
-    let root = env!("CARGO_MANIFEST_DIR");
-    let scenes: Vec<String> = std::env::var("HYRT_BENCH_SCENES")
-        .map(|s| s.split(',').map(String::from).collect())
-        .unwrap_or_else(|_| {
-            ["conference", "office", "cornell-bunny-mirror"]
-                .iter()
-                .map(|s| format!("{root}/scenes/{s}.toml"))
-                .collect()
-        });
+    let frames = frames(15);
     println!(
         "primary visibility at 640x480, {} threads; visibility medians of {frames} frames, whole frames of {}\n",
         rayon::current_num_threads(),
@@ -41,16 +27,8 @@ fn main() {
     );
     let mut vis_rows = Vec::new();
     let mut ray_rows = Vec::new();
-    for spec in &scenes {
-        let mut scene = match hyrt::scene::load(spec) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("skipping {spec}: {e:#}");
-                continue;
-            }
-        };
-        scene.settings.width = 640;
-        scene.settings.height = 480;
+    for spec in scenes() {
+        let Some(scene) = load_640x480(&spec) else { continue };
         let rays = Renderer::new(&scene, Options { visibility: Visibility::Rays, ..Options::default() });
         let raster = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
 

@@ -1,0 +1,50 @@
+//! Helpers shared by the pipeline benchmarks.
+#![allow(dead_code)]
+
+/// Median of `v` (sorted in place); NaN when empty.
+pub fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// `HYRT_BENCH_FRAMES`, or `default`.
+pub fn frames(default: usize) -> usize {
+    std::env::var("HYRT_BENCH_FRAMES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
+}
+
+/// Scene files: `HYRT_BENCH_SCENES` (comma-separated paths), or the thesis scenes in
+/// `scenes/`; command-line arguments other than cargo's `--bench` filter them by substring.
+pub fn scenes() -> Vec<String> {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
+    std::env::var("HYRT_BENCH_SCENES")
+        .map(|s| s.split(',').map(String::from).collect::<Vec<_>>())
+        .unwrap_or_else(|_| {
+            ["cornell-bunny-mirror", "office", "conference"]
+                .iter()
+                .map(|s| format!("{root}/scenes/{s}.toml"))
+                .collect()
+        })
+        .into_iter()
+        .filter(|s| filter.is_empty() || filter.iter().any(|f| s.contains(f.as_str())))
+        .collect()
+}
+
+/// Loads a scene at 640x480 (the thesis's size), or says why it is skipped.
+pub fn load_640x480(spec: &str) -> Option<hyrt::scene::Scene> {
+    match hyrt::scene::load(spec) {
+        Ok(mut s) => {
+            s.settings.width = 640;
+            s.settings.height = 480;
+            Some(s)
+        }
+        Err(e) => {
+            eprintln!("skipping {spec}: {e:#}");
+            None
+        }
+    }
+}

@@ -66,7 +66,13 @@ impl CameraRays {
     #[inline]
     pub fn direction_at(&self, fx: f32, fy: f32) -> Vec3 {
         let sx = (fx * self.two_over_w - 1.0) * self.tan_x;
-        let sy = (1.0 - fy * self.two_over_h) * self.tan_y;
-        self.forward + self.right * sx + self.up * sy
+        self.forward + self.right * sx + self.row_offset_at(fy)
+    }
+
+    /// The vertical part `sy * up` of the directions at film row coordinate `fy`, constant
+    /// along a row (row-batched ray generation adds it last, exactly as [`Self::direction_at`]).
+    #[inline]
+    pub fn row_offset_at(&self, fy: f32) -> Vec3 {
+        self.up * ((1.0 - fy * self.two_over_h) * self.tan_y)
     }
 }

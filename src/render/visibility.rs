@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use glam::Vec4;
 use hyrt_raster::{EMPTY_ID, RasterOptions, rasterize};
-use hyrt_tracer::{Hit, RayCounts, RayKind};
+use hyrt_tracer::{Hit, RayCounts, RayKind, RowRays};
 use rayon::prelude::*;
 
 use super::{FrameStats, Progress, Renderer, Visibility, par_rows};
@@ -53,17 +53,18 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
             let t = Instant::now();
             stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
                 let ids = &target.id[y as usize * w as usize..][..row.len()];
-                for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
-                    if id == EMPTY_ID {
-                        continue;
+                // Each pixel's camera ray on its triangle's plane, a row at a time (SIMD);
+                // EMPTY_ID is no triangle id, so those pixels stay `None`.
+                if r.tracer.hits_on_row(&row_rays(&r.camera, y), 0, ids, row) > 0 {
+                    // Some ray runs (numerically) parallel to its triangle's plane: a sliver
+                    // seen exactly edge-on. Ask the BVH, and count the ray. (The rasterizer
+                    // writes only ids below the triangle count or EMPTY_ID, so the miss count
+                    // covers every pixel that needs a ray.)
+                    for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
+                        if px.is_none() && id != EMPTY_ID {
+                            *px = primary_ray(r, x as u32, y, c);
+                        }
                     }
-                    let ray = r.camera_ray(x as u32, y);
-                    *px = match r.tracer.hit_on_plane(id, &ray) {
-                        Some(hit) => Some(hit),
-                        // The ray runs (numerically) parallel to the triangle's plane: a
-                        // sliver seen exactly edge-on. Ask the BVH, and count the ray.
-                        None => primary_ray(r, x as u32, y, c),
-                    };
                 }
             });
             stats.time_ms.insert("vis_resolve", super::ms(t));
@@ -74,6 +75,22 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
 
 fn primary_ray(r: &Renderer, x: u32, y: u32, c: &mut RayCounts) -> Option<Hit> {
     r.tracer.closest_hit(&r.camera_ray(x, y), RayKind::Primary, c)
+}
+
+/// The camera rays of row `y` as the tracer's [`RowRays`]: bit for bit the directions of
+/// [`Renderer::camera_ray`] (`CameraRays::direction`, then glam's `normalize`). The part of
+/// the direction that is constant along the row, `up * sy`, is computed once, with
+/// `CameraRays::direction_at`'s formula for `sy`; the test below holds the two together.
+fn row_rays(cam: &CameraRays, y: u32) -> RowRays {
+    RowRays {
+        origin: cam.eye,
+        forward: cam.forward,
+        right: cam.right,
+        row_offset: cam.row_offset_at(y as f32 + 0.5),
+        two_over_w: cam.two_over_w,
+        tan_x: cam.tan_x,
+        tmax: f32::INFINITY,
+    }
 }
 
 /// Near-plane distance for rasterization: `2^-20` of the scene's extent. With reversed-Z the
@@ -99,4 +116,46 @@ pub fn to_clip(cam: &CameraRays, near: f32, p: glam::Vec3) -> Vec4 {
     // Products with precomputed reciprocals: the rasterizer's coverage and exact-depth plane
     // are both relative to these clip coordinates, so their rounding needs no match elsewhere.
     Vec4::new(v.dot(cam.right) * cam.inv_tan_x, v.dot(cam.up) * cam.inv_tan_y, near, v.dot(cam.forward))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Vec3, vec3};
+
+    use super::*;
+    use crate::{render::Options, scene::Camera};
+
+    /// `row_rays` must reproduce `Renderer::camera_ray` exactly, or raster and ray hits would
+    /// no longer be bit-identical: every pixel of odd image sizes and cameras, including a
+    /// horizontal fov and directions where another axis dominates.
+    #[test]
+    fn row_rays_are_the_camera_rays_bit_for_bit() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        let cameras = [
+            scene.camera.unwrap(),
+            Camera::look_at(vec3(0.3, -2.0, 1.0), vec3(5.0, 1.0, -0.7), vec3(0.2, 1.0, 0.1), 70.0),
+            Camera {
+                eye: vec3(1e3, 2.5, -3.0),
+                forward: vec3(-0.1, -1.0, 0.05),
+                up: Vec3::Z,
+                fov_y_deg: 120.0,
+                fov_x_deg: Some(150.0),
+            },
+        ];
+        for (cam, (w, h)) in cameras.into_iter().zip([(37, 23), (64, 48), (131, 7)]) {
+            scene.camera = Some(cam);
+            scene.settings.width = w;
+            scene.settings.height = h;
+            let r = Renderer::new(&scene, Options::default());
+            for y in 0..h {
+                let rays = row_rays(&r.camera, y);
+                for x in 0..w {
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    let (a, b) = (rays.ray(x), r.camera_ray(x, y));
+                    assert_eq!(bits(a.dir), bits(b.dir), "pixel ({x}, {y}) of a {w}x{h} image");
+                    assert_eq!((bits(a.origin), a.tmax), (bits(b.origin), b.tmax));
+                }
+            }
+        }
+    }
 }

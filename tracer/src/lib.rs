@@ -10,6 +10,7 @@
 //!   bound and new rays start from an origin offset just past it ([`offset`]);
 //! - **counted** by kind ([`RayCounts`]), per caller, so parallel passes reduce in a fixed order.
 
+pub mod batch;
 pub mod counts;
 pub mod offset;
 pub mod triangle;
@@ -24,6 +25,7 @@ use obvhs::{
     triangle::Triangle,
 };
 
+pub use batch::{Kernel, RowRays};
 pub use counts::{RayCounts, RayKind};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
 pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle};
@@ -78,8 +80,11 @@ pub struct Tracer {
     tris: Vec<[Vec3A; 3]>,
     /// Original id of each triangle in `tris`.
     ids: Vec<u32>,
-    /// Original triangles (unscaled), for occluder-hint tests by original id.
-    original: Vec<[Vec3; 3]>,
+    /// Every triangle given to [`Tracer::build`], by original id, in the scaled frame (`p * scale`,
+    /// non-finite ones included): single-triangle tests by id ([`Tracer::hits_triangle`], the
+    /// plane hits of [`batch`]) read their vertices from here instead of scaling them per call.
+    /// The product is the same one the BVH's copy gets, so the results are bit-identical.
+    by_id: Vec<[Vec3; 3]>,
     /// Power of two applied to all coordinates (see [`Tracer::build`]).
     scale: f32,
     build_time: Duration,
@@ -136,7 +141,8 @@ impl Tracer {
                 ([t.v0, t.v1, t.v2], kept_ids[k as usize])
             })
             .unzip();
-        Self { bvh, tris: bvh_tris, ids, original: tris.to_vec(), scale, build_time: start.elapsed() }
+        let by_id = tris.iter().map(|t| t.map(|p| p * scale)).collect();
+        Self { bvh, tris: bvh_tris, ids, by_id, scale, build_time: start.elapsed() }
     }
 
     /// Wall time of [`Tracer::build`].
@@ -146,7 +152,7 @@ impl Tracer {
 
     /// Number of triangles given to [`Tracer::build`].
     pub fn triangle_count(&self) -> usize {
-        self.original.len()
+        self.by_id.len()
     }
 
     /// The internal power-of-two scale (exposed for tests).
@@ -223,12 +229,12 @@ impl Tracer {
     }
 
     fn on_triangle<const INSIDE: bool>(&self, tri: u32, ray: &Ray) -> Option<Hit> {
-        let t = self.original.get(tri as usize)?;
+        let t = self.by_id.get(tri as usize)?;
         if !ray.origin.is_finite() || !ray.dir.is_finite() {
             return None;
         }
         let (ob, pre) = self.scaled(ray);
-        let v = t.map(|p| Vec3A::from(p * self.scale));
+        let v = t.map(Vec3A::from);
         let h =
             if INSIDE { intersect_triangle(&pre, &v, ob.tmax) } else { intersect_plane(&pre, &v, ob.tmax) };
         h.map(|h| Hit { t: h.t / self.scale, tri, bary: h.bary })

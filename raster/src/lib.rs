@@ -65,22 +65,28 @@
 //! * `setup.rs`: viewport transform, fixed-point snapping and ranges, facing, interpolation
 //!   constants (the unsnapped depth plane and its clamp range, perspective-correct barycentrics);
 //! * `edge.rs`: edge functions, top-left fill rule, 8x8 block rejection/acceptance;
+//! * `setup_simd.rs`: the same setup for 8 triangles at a time with AVX2 or AVX-512;
 //! * `tile.rs`: parallel setup and binning, tiles as disjoint parts of the output buffers;
 //! * `zbuf.rs`: the per-tile depth test (with the tie window), and barycentrics computed once per
 //!   pixel for the winning triangle;
-//! * `simd.rs`: the same depth test on rows of 8 pixels with AVX2 or AVX-512, chosen at run time
-//!   (x86-64 only; the scalar kernel is used elsewhere). Results are bit-identical.
+//! * `simd.rs`: the same depth test and barycentrics on 8 pixels at a time with AVX2 or AVX-512.
+//!
+//! The vector kernels are chosen at run time (x86-64 only; the scalar ones are used elsewhere);
+//! results are bit-identical whatever the kernel (tests compare them).
 //!
 //! # Performance notes
 //!
 //! The time per frame is split between setup (per input triangle: rejection, projection,
-//! snapping; reading the input itself dominates for scenes with many off-screen triangles) and the
-//! tiles (per covered pixel and fragment). See `benches/raster.rs` (`cargo bench -p
-//! hyrt-raster`).
+//! snapping; reading the input itself dominates for scenes with many off-screen triangles), the
+//! depth test (per triangle and tile for the many small triangles of detailed meshes, per
+//! fragment for large ones) and the resolve (per pixel: two divisions for the barycentrics). See
+//! `benches/raster.rs` (`cargo bench -p hyrt-raster`).
 
 mod clip;
 mod edge;
 mod setup;
+#[cfg(target_arch = "x86_64")]
+mod setup_simd;
 #[cfg(target_arch = "x86_64")]
 mod simd;
 mod tile;
@@ -232,10 +238,11 @@ pub fn rasterize(tris: &[[Vec4; 3]], ids: &[u32], width: u32, height: u32, opts:
         return Target::empty(width, height);
     }
     let ctx = SetupContext::new(width, height, opts.cull_backfaces);
-    let binned = tile::Binned::new(tris, Some(ids), &ctx, opts.tile_size);
+    let isa = zbuf::Isa::detect();
+    let binned = tile::Binned::new(tris, Some(ids), &ctx, opts.tile_size, isa);
     // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
     let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
-    zbuf::render(&binned, opts.reversed_z, tie, zbuf::Isa::detect())
+    zbuf::render(&binned, opts.reversed_z, tie, isa)
 }
 
 /// Counts, per pixel, how many triangles cover the pixel centre (no depth test), with exactly the
@@ -254,7 +261,7 @@ pub fn coverage_count(tris: &[[Vec4; 3]], width: u32, height: u32, opts: &Raster
         return Vec::new();
     }
     let ctx = SetupContext::new(width, height, opts.cull_backfaces);
-    let binned = tile::Binned::new(tris, None, &ctx, opts.tile_size);
+    let binned = tile::Binned::new(tris, None, &ctx, opts.tile_size, zbuf::Isa::detect());
     let grid = binned.grid;
     let mut count = vec![0u32; width as usize * height as usize];
     grid.split(&mut count).into_par_iter().enumerate().for_each(|(t, mut rows)| {

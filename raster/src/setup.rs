@@ -35,7 +35,9 @@
 //! Every fan triangle is then re-ordered to positive area so that the edge functions are positive
 //! inside. A fan triangle whose snapped area has the opposite sign to its polygon's is a snapping
 //! artifact of a sliver and is dropped; zero-area triangles are dropped too (they cover no sample
-//! and their interpolation would divide by zero).
+//! and their interpolation would divide by zero), and so are tiny triangles that cover none of
+//! the (at most 4) samples of their pixel bounds ([`misses_every_sample`]), which many triangles
+//! of detailed meshes do.
 //!
 //! # Depth: the plane of the unsnapped polygon
 //!
@@ -135,6 +137,21 @@ pub(crate) struct SetupTri {
 }
 
 impl SetupTri {
+    /// A set-up triangle from its fields (see the struct), for the vector kernels of
+    /// `crate::setup_simd`, which compute them as [`setup_triangle`] does.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(crate) fn from_parts(
+        v: [[i32; 2]; 3],
+        bbox: [u32; 4],
+        id: u32,
+        [z0, dz1, dz2]: [f64; 3],
+        range: [f32; 2],
+        persp: [[f32; 3]; 3],
+    ) -> Self {
+        Self { v, bbox, id, z0, dz: [dz1, dz2], range, persp }
+    }
+
     /// Depth plane constants: `depth(e) = (z0 + e1 dz[0]) + e2 dz[1]` before clamping.
     #[inline]
     pub fn z0(&self) -> f64 {
@@ -145,6 +162,12 @@ impl SetupTri {
     #[inline]
     pub fn dz(&self) -> [f64; 2] {
         self.dz
+    }
+
+    /// Perspective constants of [`SetupTri::bary`]: per vertex `i`, `[q_i, q_i b1_i, q_i b2_i]`.
+    #[inline]
+    pub fn persp(&self) -> &[[f32; 3]; 3] {
+        &self.persp
     }
 
     /// `[lo, hi]` that [`SetupTri::depth`] clamps to, after rounding to `f32`.
@@ -214,7 +237,7 @@ pub(crate) fn clamp_depth(d: f32, [lo, hi]: [f32; 2]) -> f32 {
 /// Largest accepted bound on a vertex's depth correction `A (X' - X) + B (Y' - Y)` (module
 /// docs): depths are in `[0, 1]`, so a larger correction only comes from a plane that is not
 /// meaningful at the scale of the snapping.
-const MAX_DEPTH_CORRECTION: f64 = 1.0;
+pub(crate) const MAX_DEPTH_CORRECTION: f64 = 1.0;
 
 /// Gradient `[A, B]` of the depth plane through three unsnapped vertices `[X, Y, D]` (screen
 /// position in fixed-point units, i.e. `2^SUBPIXEL_BITS` per pixel, and depth), or `[0, 0]` if it
@@ -234,23 +257,29 @@ fn depth_gradient(pa: [f64; 3], pb: [f64; 3], pc: [f64; 3]) -> [f64; 2] {
 }
 
 /// `z_0`, the depth of the plane with gradient `grad` at the snapped position `f` of the vertex
-/// `p = [X, Y, D]` (as in [`depth_gradient`]): `D + A (X' - X) + B (Y' - Y)`.
+/// `p = [X, Y, D]` (as in [`depth_gradient`]): `D + A (X' - X) + B (Y' - Y)`. The snapped
+/// position is an integer below `2^28` in magnitude, exact in `f64`.
 #[inline(always)]
-fn depth_at_snapped(grad: [f64; 2], p: [f64; 3], f: [i64; 2]) -> f64 {
-    // The snapped position is an integer below 2^28, exact in f64, and within half a unit of the
-    // unsnapped one: the offsets are exact (Sterbenz) or nearly so.
-    p[2] + (grad[0] * (f[0] as f64 - p[0]) + grad[1] * (f[1] as f64 - p[1]))
+fn depth_at_snapped(grad: [f64; 2], p: [f64; 3], f: [f64; 2]) -> f64 {
+    // The snapped position is within half a unit of the unsnapped one: the offsets are exact
+    // (Sterbenz) or nearly so.
+    p[2] + (grad[0] * (f[0] - p[0]) + grad[1] * (f[1] - p[1]))
 }
 
 /// `z_k - z_0` for the vertices `p0`, `pk` (as in [`depth_at_snapped`]), as the difference of
 /// their depths plus that of their corrections: `(D_k - D_0) + A (dX' - dX) + B (dY' - dY)`,
-/// with `dX' = X'_k - X'_0` the exact integer difference. Every fan triangle of a polygon
-/// shares vertex 0, so this is all its interpolation needs besides `z_0` (and a triangle is
-/// the fan of one).
+/// with `snapped = [dX', dY']`, `dX' = X'_k - X'_0` the exact integer difference (below `2^29`
+/// in magnitude: exact in `f64`). Every fan triangle of a polygon shares vertex 0, so this is
+/// all its interpolation needs besides `z_0` (and a triangle is the fan of one).
 #[inline(always)]
-fn depth_difference(grad: [f64; 2], p0: [f64; 3], f0: [i64; 2], pk: [f64; 3], fk: [i64; 2]) -> f64 {
-    let snapped = [(fk[0] - f0[0]) as f64, (fk[1] - f0[1]) as f64];
+fn depth_difference(grad: [f64; 2], p0: [f64; 3], pk: [f64; 3], snapped: [f64; 2]) -> f64 {
     (pk[2] - p0[2]) + (grad[0] * (snapped[0] - (pk[0] - p0[0])) + grad[1] * (snapped[1] - (pk[1] - p0[1])))
+}
+
+/// `fk - f0` as `f64` (exact: the coordinates are below `2^28` in magnitude).
+#[inline(always)]
+fn snapped_offset(f0: [i64; 2], fk: [i64; 2]) -> [f64; 2] {
+    [(fk[0] - f0[0]) as f64, (fk[1] - f0[1]) as f64]
 }
 
 /// The clamp range of [`SetupTri::depth`]: `[min D, max D]` over the polygon's vertex depths,
@@ -344,25 +373,90 @@ pub(crate) fn setup_triangle(
     scratch: &mut ClipScratch,
     out: &mut Vec<SetupTri>,
 ) {
+    match classify(tri) {
+        Class::Rejected => {}
+        Class::Inside => setup_unclipped(&tri.map(|v| v.as_dvec4()), id, ctx, out),
+        Class::Clip => setup_clipped(tri, id, ctx, scratch, out),
+    }
+}
+
+/// What [`setup_triangle`] does with a triangle, decided on the `f32` input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    /// Not finite, or entirely outside one viewport plane: nothing to draw.
+    Rejected,
+    /// Inside the viewport and the depth range: [`setup_unclipped`].
+    Inside,
+    /// Anything else: [`setup_clipped`].
+    Clip,
+}
+
+/// The class of a triangle: [`Class`].
+#[inline(always)]
+fn classify(tri: &[Vec4; 3]) -> Class {
     if !(tri[0].is_finite() && tri[1].is_finite() && tri[2].is_finite()) {
-        return;
+        return Class::Rejected;
     }
     let codes = [outcode(tri[0]), outcode(tri[1]), outcode(tri[2])];
     if codes[0] & codes[1] & codes[2] != 0 {
-        return;
-    }
-    if codes[0] | codes[1] | codes[2] == 0 {
-        setup_unclipped(&tri.map(|v| v.as_dvec4()), id, ctx, out);
+        Class::Rejected
+    } else if codes[0] | codes[1] | codes[2] == 0 {
+        Class::Inside
     } else {
-        setup_clipped(tri, id, ctx, scratch, out);
+        Class::Clip
     }
+}
+
+/// Sets up the triangles of `tris` (`tris[k]` with id `ids[k]`, or 0 for all without `ids`;
+/// those with id [`EMPTY_ID`](crate::EMPTY_ID) are skipped), appending to `out` in input order
+/// exactly what [`setup_triangle`] appends for each in turn. The vector kernels
+/// (`crate::setup_simd`) do the same 8 triangles at a time.
+pub(crate) fn setup_chunk(
+    tris: &[[Vec4; 3]],
+    ids: Option<&[u32]>,
+    ctx: &SetupContext,
+    out: &mut Vec<SetupTri>,
+) {
+    let mut scratch = ClipScratch::new();
+    for (k, tri) in tris.iter().enumerate() {
+        if let Some(ahead) = tris.get(k + PREFETCH_AHEAD) {
+            prefetch_input(ahead);
+        }
+        let id = ids.map_or(0, |ids| ids[k]);
+        if id != crate::EMPTY_ID {
+            setup_triangle(tri, id, ctx, &mut scratch, out);
+        }
+    }
+}
+
+/// How many input triangles ahead setup asks for: reading the input (48 bytes per triangle) is
+/// a large part of the setup time of scenes with many rejected triangles, and the hardware
+/// prefetcher alone leaves the core waiting.
+pub(crate) const PREFETCH_AHEAD: usize = 24;
+
+/// Starts loading an input triangle into the cache. A hint only.
+#[inline(always)]
+pub(crate) fn prefetch_input(tri: &[Vec4; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let p: *const i8 = (tri as *const [Vec4; 3]).cast();
+        // SAFETY: prefetching has no effect on memory or on the program's state; SSE is part of
+        // x86-64.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<[Vec4; 3]>() - 1));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = tri;
 }
 
 /// [`setup_triangle`] for triangles that reach outside the viewport or the depth range (a
 /// minority: kept out of line so that the common path stays small).
 #[cold]
 #[inline(never)]
-fn setup_clipped(
+pub(crate) fn setup_clipped(
     tri: &[Vec4; 3],
     id: u32,
     ctx: &SetupContext,
@@ -457,9 +551,10 @@ fn setup_unclipped(tri: &[DVec4; 3], id: u32, ctx: &SetupContext, out: &mut Vec<
     // Exactly what `setup_polygon` computes for a triangle (module docs: Depth).
     let [u0, u1, u2] = unsnapped;
     let grad = depth_gradient(u0, u1, u2);
-    let z0 = depth_at_snapped(grad, u0, xy[0]);
-    let dz =
-        [0.0, depth_difference(grad, u0, xy[0], u1, xy[1]), depth_difference(grad, u0, xy[0], u2, xy[2])];
+    let z0 = depth_at_snapped(grad, u0, xy[0].map(|c| c as f64));
+    let dz = [0.0, depth_difference(grad, u0, u1, snapped_offset(xy[0], xy[1])), {
+        depth_difference(grad, u0, u2, snapped_offset(xy[0], xy[2]))
+    }];
     let range = depth_range(unsnapped.iter().map(|u| u[2]));
     // The maximum is exact and order-independent (positive, finite values): the same as `finish`.
     let scale = 1.0 / inv_w[0].max(inv_w[1]).max(inv_w[2]);
@@ -470,7 +565,7 @@ fn setup_unclipped(tri: &[DVec4; 3], id: u32, ctx: &SetupContext, out: &mut Vec<
         let q = (inv_w[i] * scale) as f32;
         [q, if i == 1 { q } else { 0.0 }, if i == 2 { q } else { 0.0 }]
     };
-    out.push(SetupTri {
+    let tri = SetupTri {
         // In range by the MAX_FIXED check in `to_fixed`.
         v: [xy[0], xy[b], xy[c]].map(|p| [p[0] as i32, p[1] as i32]),
         bbox,
@@ -479,7 +574,37 @@ fn setup_unclipped(tri: &[DVec4; 3], id: u32, ctx: &SetupContext, out: &mut Vec<
         dz: [dz[b] * inv_area, dz[c] * inv_area],
         range,
         persp: [persp(0), persp(b), persp(c)],
-    });
+    };
+    if !misses_every_sample(&tri) {
+        out.push(tri);
+    }
+}
+
+/// Fixed-point extent below which a triangle can count as tiny for [`misses_every_sample`]:
+/// `2^14` units (64 pixels), small enough for the vector setup to evaluate its edge functions
+/// in `i32` (`crate::setup_simd`).
+pub(crate) const TINY_SPAN: i32 = 1 << 14;
+
+/// Whether a set-up triangle is tiny, its pixel bounds at most 2 x 2 pixels and its vertices
+/// within [`TINY_SPAN`] of each other on both axes, and covers none of the samples of its
+/// bounds (the exact edge tests of [`crate::edge`]): it can produce no fragment, and is not
+/// output. Many triangles of detailed meshes fall between the pixel centres; dropping them
+/// here saves binning and drawing them. Other triangles are kept whatever they cover. The
+/// vector setup applies the same rule, so both output the same triangles.
+#[inline]
+fn misses_every_sample(tri: &SetupTri) -> bool {
+    let [x0, y0, x1, y1] = tri.bbox;
+    let [v0, v1, v2] = tri.v;
+    let span = |c: usize| v0[c].max(v1[c]).max(v2[c]) - v0[c].min(v1[c]).min(v2[c]);
+    if x1 - x0 > 1 || y1 - y0 > 1 || span(0) >= TINY_SPAN || span(1) >= TINY_SPAN {
+        return false;
+    }
+    let ef = crate::edge::EdgeFns::new(tri);
+    let covered = |x: u32, y: u32| {
+        let e = ef.at_pixel(x, y);
+        (0..3).all(|i| e[i] >= ef.bias[i])
+    };
+    !(y0..=y1).any(|y| (x0..=x1).any(|x| covered(x, y)))
 }
 
 /// Inclusive pixel bounds of the samples a triangle with these fixed-point vertices may cover,
@@ -571,10 +696,10 @@ fn setup_polygon(pv: &[Projected], id: u32, ctx: &SetupContext, out: &mut Vec<Se
     }
     let [a, b, c] = best.0;
     let grad = depth_gradient(u(&pv[a]), u(&pv[b]), u(&pv[c]));
-    let z0 = depth_at_snapped(grad, u(&pv[0]), xy(&pv[0]));
+    let z0 = depth_at_snapped(grad, u(&pv[0]), xy(&pv[0]).map(|c| c as f64));
     let mut dz = [0.0; MAX_POLY_VERTS];
     for (d, p) in dz.iter_mut().zip(pv).skip(1) {
-        *d = depth_difference(grad, u(&pv[0]), xy(&pv[0]), u(p), xy(p));
+        *d = depth_difference(grad, u(&pv[0]), u(p), snapped_offset(xy(&pv[0]), xy(p)));
     }
     let range = depth_range(pv.iter().map(|p| p.z));
 
@@ -592,7 +717,10 @@ fn setup_polygon(pv: &[Projected], id: u32, ctx: &SetupContext, out: &mut Vec<Se
         let Some(bbox) = pixel_bounds(&verts.map(|p| xy(&p)), ctx) else {
             continue;
         };
-        out.push(finish(&verts, z0, [dz[b], dz[c]], range, tri_area, bbox, id));
+        let tri = finish(&verts, z0, [dz[b], dz[c]], range, tri_area, bbox, id);
+        if !misses_every_sample(&tri) {
+            out.push(tri);
+        }
     }
 }
 

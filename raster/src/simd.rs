@@ -1,8 +1,7 @@
 //! Vector kernels of the z-buffer (x86-64, chosen at run time): AVX2 and AVX-512.
 //!
-//! Both work on rows of 8 pixels: the three edge functions as 8 `i64` lanes, the depth as 8
-//! `f64` lanes, the z-buffer as 8 `f32` / `u32` lanes. They compute exactly what the scalar
-//! kernel ([`ZBuffer::draw_scalar`]) computes:
+//! They compute exactly what the scalar kernels ([`ZBuffer::draw_scalar`], and the scalar
+//! resolve of [`ZBuffer`]) compute:
 //!
 //! * coverage from the same exact integer edge values (sign tests);
 //! * the depth with the same `f64` operations in the same order as [`SetupTri::depth`] (IEEE
@@ -11,20 +10,33 @@
 //!   `min` instructions compute it);
 //! * the same comparisons: closer or not, and for `TIE` the same `f32` window test as
 //!   [`crate::zbuf::in_tie_window`]; the rare ties (equal depths, or within the window) are decided
-//!   by [`wins`] itself.
+//!   by [`wins`] itself;
+//! * the barycentrics of the winners with [`SetupTri::bary`]'s `f64` operations, in its order
+//!   ([`resolve_avx2`], [`resolve_avx512`], 8 pixels at a time).
 //!
-//! The traversal ([`draw`]) is [`crate::edge::cover_rect`]'s, specialised: the same per-pixel
-//! coverage tests, plus a test of the whole tile rectangle first (every pixel of a tile inside a
-//! large triangle is covered: no per-block work at all), and block edge values stepped from block
-//! to block rather than evaluated anew. Only speed depends on these choices. It is generic over
-//! the [`Lanes`] of a backend, whose methods are inlined into the `#[target_feature]` entry points
-//! ([`draw_all_avx2`], [`draw_all_avx512`]).
+//! The traversal ([`draw_all`]) covers the same pixels as [`crate::edge::cover_rect`]; only
+//! speed depends on how:
+//!
+//! * a triangle whose edge functions fit `i32` over its rectangle in the tile (any triangle
+//!   spanning less than 64 pixels, and most larger ones: [`QuadEdges`]) is tested 4 x 2 pixels
+//!   at a time, in the 8 lanes of one vector ([`draw_quads`]): a single test for most triangles
+//!   of detailed meshes, and for larger ones, per pair of rows, only the quads that the rows'
+//!   spans may reach ([`QuadEdges::spans`]);
+//! * other triangles ([`draw`]) are tested on rows of 8 pixels with `i64` edge functions: after
+//!   a test of the whole tile rectangle (every pixel of a tile inside a large triangle is
+//!   covered: no per-pixel coverage tests), in 8x8 blocks with whole-block rejection and
+//!   acceptance, their edge values stepped from block to block.
+//!
+//! It is generic over the [`Lanes`] of a backend, whose methods are inlined into the
+//! `#[target_feature]` entry points ([`draw_all_avx2`], [`draw_all_avx512`]).
 
 use std::arch::x86_64::*;
+use std::mem::MaybeUninit;
 
+use crate::EMPTY_ID;
 use crate::edge::{BLOCK, EdgeFns, low_bits};
-use crate::setup::SetupTri;
-use crate::zbuf::{ZBuffer, clip_to_tile, wins};
+use crate::setup::{HALF_PIXEL, SUBPIXEL_ONE, SetupTri};
+use crate::zbuf::{NONE, Rows, ZBuffer, clip_to_tile, wins};
 
 /// `[f(0), f(1), f(2)]`. Written out rather than with `array::map` or `from_fn`, which are not
 /// always inlined, and then cannot inline vector code into their bodies (no target features).
@@ -41,8 +53,8 @@ fn each<T>(mut f: impl FnMut(usize) -> T) -> [T; 3] {
 trait Lanes<'t> {
     /// 8 consecutive values of one edge function along a row.
     type Row: Copy;
-    /// Triangles with `area >= MAX_AREA` take the scalar path (see [`Avx2::MAX_AREA`]).
-    const MAX_AREA: i64;
+    /// The per-triangle constants of the depth test alone (what [`Lanes::test_quad`] needs).
+    type Depth;
 
     fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self;
     /// `e + j sx_i` for `j = 0..8`: edge `i` along a row, from its value `e` at the first pixel.
@@ -63,6 +75,19 @@ trait Lanes<'t> {
         e1: Self::Row,
         e2: Self::Row,
     );
+
+    fn depth(tri: &'t SetupTri, idx: u32, tie: f32) -> Self::Depth;
+    /// Depth-tests the 4 x 2 pixels of `zb` at tile indices `k..k + 4` (lanes 0-3) and
+    /// `k + w..k + w + 4` (lanes 4-7, `w` the tile width) whose bits are set in `covered`, given
+    /// their unbiased `e1`, `e2` as 8 lanes of `i32`.
+    fn test_quad<const REVERSED: bool, const TIE: bool>(
+        c: &Self::Depth,
+        zb: &mut ZBuffer<'t>,
+        k: usize,
+        covered: u32,
+        e1: __m256i,
+        e2: __m256i,
+    );
 }
 
 /// 8 entries of a tile buffer from `k` on. Bounds-checked: the buffers have `PAD` spare entries
@@ -75,10 +100,11 @@ fn row_of<T>(buf: &mut [T], k: usize) -> &mut [T; 8] {
 /// The lanes of `ties` whose fragment beats the z-buffer entry although its depth is equal (or,
 /// for `TIE`, within the tie window): [`wins`] per lane (rare: coplanar or intersecting surfaces,
 /// or depth 0 against an empty reversed-Z pixel).
+/// Lane `j` is the pixel of tile index `index(j)`.
 #[inline(always)]
 fn tie_winners<const REVERSED: bool, const TIE: bool>(
     zb: &ZBuffer,
-    k: usize,
+    index: impl Fn(usize) -> usize,
     tri: &SetupTri,
     d: &[f32; 8],
     ties: u32,
@@ -87,7 +113,8 @@ fn tie_winners<const REVERSED: bool, const TIE: bool>(
     let mut t = ties;
     while t != 0 {
         let j = t.trailing_zeros() as usize;
-        if wins::<REVERSED, TIE>(d[j], tri.id, zb.depth[k + j], zb.win[k + j], &zb.tris, zb.tie) {
+        let k = index(j);
+        if wins::<REVERSED, TIE>(d[j], tri.id, zb.depth[k], zb.win[k], &zb.tris, zb.tie) {
             won |= 1 << j;
         }
         t &= t - 1;
@@ -111,11 +138,266 @@ fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(zb: &mut ZB
                 _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<SetupTri>() - 1));
             }
         }
-        let ef = EdgeFns::new(zb.tris[idx as usize]);
-        if ef.area >= L::MAX_AREA {
-            zb.draw_scalar::<REVERSED, TIE>(idx);
-        } else {
-            draw::<L, REVERSED, TIE>(zb, idx, &ef);
+        let tri = zb.tris[idx as usize];
+        let rect = clip_to_tile(zb.rect, tri.bbox);
+        if let Some(edges) = QuadEdges::new(tri, rect) {
+            draw_quads::<L, REVERSED, TIE>(zb, idx, rect, &edges);
+            continue;
+        }
+        draw::<L, REVERSED, TIE>(zb, idx, &EdgeFns::new(tri));
+    }
+}
+
+/// Width of the pixel rectangles of [`draw_quads`]: 4 columns by 2 rows fill the 8 lanes.
+const QUAD_W: u32 = 4;
+
+/// Fixed-point extent below which a triangle's edge functions fit `i32` over the lanes of
+/// [`draw_quads`] (see [`QuadEdges::new`]): `2^14` units, 64 pixels.
+const QUAD_SPAN: i32 = 1 << 14;
+
+/// The edge functions of a small triangle (all vertices within [`QUAD_SPAN`] of each other in x
+/// and in y) as `i32`, from the centre of the first pixel of its rectangle: unbiased values, x
+/// and y steps, fill-rule biases (as [`EdgeFns`], which they equal).
+struct QuadEdges {
+    e: [i32; 3],
+    sx: [i32; 3],
+    sy: [i32; 3],
+    bias: [i32; 3],
+}
+
+impl QuadEdges {
+    /// The edge functions of `tri` at the first pixel of `rect` (its pixel rectangle within the
+    /// tile, as [`clip_to_tile`] gives it), or `None` if the rectangle is empty or the triangle
+    /// is not small (see [`QuadEdges::fit`] for the others).
+    ///
+    /// Bounds: the vertices are within `S = QUAD_SPAN` of each other, so every edge vector has
+    /// `|d| < S`, and the centre `p` of a pixel of `rect` lies within the vertices' bounding box
+    /// ([`crate::setup`]'s pixel bounds are the samples inside it), so `|p - a| < S` for every
+    /// vertex `a`. The lanes of [`draw_quads`] and the rows of [`QuadEdges::spans`] reach at most
+    /// 3 pixels right and 7 rows below pixels of `rect` (`7 * 256` units): `|E| = |d.x (p.y -
+    /// a.y) - d.y (p.x - a.x)| < 2 S (S + 7 * 256) < 2^30`, and a step `|4 * 256 d| < 2^24`: all
+    /// exact in `i32`.
+    #[inline(always)]
+    fn new(tri: &SetupTri, rect: [u32; 4]) -> Option<Self> {
+        let [v0, v1, v2] = tri.v;
+        let span = |c: usize| v0[c].max(v1[c]).max(v2[c]) - v0[c].min(v1[c]).min(v2[c]);
+        if span(0) >= QUAD_SPAN || span(1) >= QUAD_SPAN || rect[0] >= rect[2] || rect[1] >= rect[3] {
+            return None;
+        }
+        // Below 2^24 + 2^7: pixel coordinates are below MAX_TARGET_DIM = 2^16.
+        let centre = |p: u32| p as i32 * SUBPIXEL_ONE as i32 + HALF_PIXEL as i32;
+        let (px, py) = (centre(rect[0]), centre(rect[1]));
+        let one = SUBPIXEL_ONE as i32;
+        let mut edges = Self { e: [0; 3], sx: [0; 3], sy: [0; 3], bias: [0; 3] };
+        for (i, (a, b)) in [(v1, v2), (v2, v0), (v0, v1)].into_iter().enumerate() {
+            // As `Edge::new`, `Edge::at_pixel`, `Edge::step_x`, `Edge::step_y`.
+            let d = [b[0] - a[0], b[1] - a[1]];
+            edges.e[i] = d[0] * (py - a[1]) - d[1] * (px - a[0]);
+            edges.sx[i] = -d[1] * one;
+            edges.sy[i] = d[0] * one;
+            edges.bias[i] = i32::from(!(d[1] < 0 || (d[1] == 0 && d[0] > 0)));
+        }
+        Some(edges)
+    }
+
+    /// The edge functions `ef` (with unbiased values `e` at the first pixel of `rect`) as `i32`,
+    /// if every value [`draw_quads`] and [`QuadEdges::spans`] compute from them fits: those at
+    /// offsets up to `w + 3` pixels right and `h + 7` rows below the first (`w x h` the size of
+    /// `rect`) are within `±2^30` (the extremes of an affine function over a rectangle are at
+    /// its corners), hence also the steps and the values of a quad or 8 rows between them, and
+    /// the biases (0 or 1) change nothing. Most triangles too large for [`QuadEdges::new`] are
+    /// still small at the scale of a tile.
+    #[inline(always)]
+    fn fit(ef: &EdgeFns, e: [i64; 3], rect: [u32; 4]) -> Option<Self> {
+        const LIMIT: i64 = 1 << 30;
+        let (dx, dy) = (i64::from(rect[2] - rect[0] + 3), i64::from(rect[3] - rect[1] + 7));
+        let mut edges = Self { e: [0; 3], sx: [0; 3], sy: [0; 3], bias: [0; 3] };
+        for (i, &e) in e.iter().enumerate() {
+            let (ox, oy) = (ef.sx[i] * dx, ef.sy[i] * dy);
+            let hi = e + ox.max(0) + oy.max(0);
+            let lo = e + ox.min(0) + oy.min(0);
+            if lo <= -LIMIT || hi >= LIMIT {
+                return None;
+            }
+            // In range: `|sx| <= |ox|`, `|sy| <= |oy|`, and those are within `hi - lo`.
+            edges.e[i] = e as i32;
+            edges.sx[i] = ef.sx[i] as i32;
+            edges.sy[i] = ef.sy[i] as i32;
+            edges.bias[i] = ef.bias[i] as i32;
+        }
+        Some(edges)
+    }
+
+    /// Biased values of edge `i` over the 4 x 2 pixels from the first: lane `j` is column
+    /// `j % 4` of row `j / 4`. AVX2 must be available.
+    #[inline(always)]
+    unsafe fn lanes(&self, i: usize) -> __m256i {
+        // SAFETY: AVX2 is available (the caller's contract).
+        unsafe {
+            let (jx, jy) =
+                (_mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3), _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
+            let e = _mm256_set1_epi32(self.e[i] - self.bias[i]);
+            let dx = _mm256_mullo_epi32(jx, _mm256_set1_epi32(self.sx[i]));
+            _mm256_add_epi32(e, _mm256_add_epi32(dx, _mm256_mullo_epi32(jy, _mm256_set1_epi32(self.sy[i]))))
+        }
+    }
+
+    /// Change of edge `i` for two rows down, in every lane. AVX2 must be available.
+    #[inline(always)]
+    unsafe fn step(&self, i: usize) -> __m256i {
+        // SAFETY: AVX2 is available (the caller's contract).
+        unsafe { _mm256_set1_epi32(2 * self.sy[i]) }
+    }
+
+    /// Change of edge `i` for one quad (4 pixels) right, in every lane. AVX2 must be available.
+    #[inline(always)]
+    unsafe fn right(&self, i: usize) -> __m256i {
+        // SAFETY: AVX2 is available (the caller's contract).
+        unsafe { _mm256_set1_epi32(QUAD_W as i32 * self.sx[i]) }
+    }
+
+    /// The spans of the 4 pairs of rows from row `row` of the rectangle (`width x height`
+    /// pixels, its first pixel the one of [`QuadEdges::new`]): `[lo, hi]` with `lo[p] <= d <=
+    /// hi[p]` for every column offset `d` of a pixel of the pair (rows `row + 2 p`, `row + 2 p +
+    /// 1`) that the triangle covers, within `[0, width - 1]`; `lo[p] > hi[p]` when there is none
+    /// (or the pair is outside the rectangle). AVX2 must be available.
+    ///
+    /// With the biased value `b` of an edge at the row's first pixel and its x step `s`, a
+    /// pixel at offset `d` is inside the edge iff `b + d s >= 0`: `d >= -b / s` for `s > 0`,
+    /// `d <= -b / s` for `s < 0`, and `b >= 0` for `s = 0`. The bounds are computed in `f32`
+    /// for 8 rows at once (`b` exact in `i32`, see [`QuadEdges::new`] and [`QuadEdges::fit`]),
+    /// then rounded outwards (`floor` of the lower, `ceil` of the upper): the few roundings
+    /// (each of relative size `2^-24`) move a bound that lies within the rectangle (`|-b / s| <
+    /// 2^16`) by far less than a pixel, and a bound beyond it is clamped to it. They only limit
+    /// which quads are tested: the coverage is the exact integer test of each lane.
+    #[inline(always)]
+    unsafe fn spans(&self, row: u32, width: u32, height: u32) -> [[i32; 4]; 2] {
+        /// Stands for "no bound": beyond any offset, exact in `f32` and `i32`.
+        const FAR: f32 = (1 << 30) as f32;
+        // SAFETY: AVX2 is available (the caller's contract); the stores write arrays.
+        unsafe {
+            let rows =
+                _mm256_add_epi32(_mm256_set1_epi32(row as i32), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+            let mut lo = _mm256_setzero_ps();
+            let mut hi = _mm256_set1_ps((width - 1) as f32);
+            // Rows beyond the rectangle are empty.
+            let mut empty = _mm256_cmpgt_epi32(rows, _mm256_set1_epi32(height as i32 - 1));
+            for i in 0..3 {
+                let (s, b0) = (self.sx[i], self.e[i] - self.bias[i]);
+                let b = _mm256_add_epi32(
+                    _mm256_set1_epi32(b0),
+                    _mm256_mullo_epi32(rows, _mm256_set1_epi32(self.sy[i])),
+                );
+                if s == 0 {
+                    empty = _mm256_or_si256(empty, _mm256_cmpgt_epi32(_mm256_setzero_si256(), b));
+                    continue;
+                }
+                let t = _mm256_mul_ps(_mm256_cvtepi32_ps(b), _mm256_set1_ps(-1.0 / s as f32));
+                if s > 0 {
+                    lo = _mm256_max_ps(lo, _mm256_floor_ps(t));
+                } else {
+                    hi = _mm256_min_ps(hi, _mm256_ceil_ps(t));
+                }
+            }
+            // `min(lo, FAR)`: within `i32`; an empty row has `lo > hi`.
+            let empty = _mm256_castsi256_ps(empty);
+            lo = _mm256_blendv_ps(_mm256_min_ps(lo, _mm256_set1_ps(FAR)), _mm256_set1_ps(FAR), empty);
+            hi = _mm256_blendv_ps(_mm256_max_ps(hi, _mm256_set1_ps(-FAR)), _mm256_set1_ps(-FAR), empty);
+            // The union of the two rows of each pair.
+            let even = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+            let odd = _mm256_setr_epi32(1, 3, 5, 7, 1, 3, 5, 7);
+            let lo = _mm_min_ps(
+                _mm256_castps256_ps128(_mm256_permutevar8x32_ps(lo, even)),
+                _mm256_castps256_ps128(_mm256_permutevar8x32_ps(lo, odd)),
+            );
+            let hi = _mm_max_ps(
+                _mm256_castps256_ps128(_mm256_permutevar8x32_ps(hi, even)),
+                _mm256_castps256_ps128(_mm256_permutevar8x32_ps(hi, odd)),
+            );
+            // Integers within `[-FAR, FAR]`: the conversions are exact.
+            let mut spans = [[0i32; 4]; 2];
+            _mm_storeu_si128(spans[0].as_mut_ptr().cast(), _mm_cvtps_epi32(lo));
+            _mm_storeu_si128(spans[1].as_mut_ptr().cast(), _mm_cvtps_epi32(hi));
+            spans
+        }
+    }
+}
+
+/// Depth-tests the pixels of the tile rectangle `rect` covered by small triangle `idx` of the
+/// tile list, whose edge functions are `edges`: 2 rows at a time, 4 pixels each, in the 8 lanes
+/// of one vector, with `i32` edge functions. Most triangles of detailed meshes cover a few
+/// pixels, many of the rest are slivers a pixel or two wide: per pair of rows, only the 4-pixel
+/// quads from the first to the last pixel that the pair's span may reach ([`QuadEdges::spans`])
+/// are tested.
+#[inline(always)]
+fn draw_quads<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
+    zb: &mut ZBuffer<'t>,
+    idx: u32,
+    [x0, y0, x1, y1]: [u32; 4],
+    edges: &QuadEdges,
+) {
+    let tri = zb.tris[idx as usize];
+    // Only created inside the `#[target_feature]` entry points (see `Lanes`), both with AVX2.
+    let c = L::depth(tri, idx, zb.tie);
+    let w = zb.w;
+    let (width, height) = (x1 - x0, y1 - y0);
+    let k0 = (y0 - zb.rect[1]) as usize * w + (x0 - zb.rect[0]) as usize;
+    // SAFETY: AVX2 is available (see `c`).
+    unsafe {
+        // Biased values at the first quad of each pair of rows: inside iff all three are `>= 0`.
+        let mut e = [edges.lanes(0), edges.lanes(1), edges.lanes(2)];
+        let down = [edges.step(0), edges.step(1), edges.step(2)];
+        let right = [edges.right(0), edges.right(1), edges.right(2)];
+        let bias = [_mm256_set1_epi32(edges.bias[1]), _mm256_set1_epi32(edges.bias[2])];
+        if width <= QUAD_W && height <= 2 {
+            // A single quad: most triangles of detailed meshes.
+            let columns = low_bits(width) * 0x11;
+            let rows = if height == 2 { 0xff } else { 0x0f };
+            let outside = _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]);
+            let mask = !(_mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32) & rows & columns;
+            if mask != 0 {
+                let (e1, e2) = (_mm256_add_epi32(e[1], bias[0]), _mm256_add_epi32(e[2], bias[1]));
+                L::test_quad::<REVERSED, TIE>(&c, zb, k0, mask, e1, e2);
+            }
+            return;
+        }
+        let mut row = 0;
+        while row < height {
+            // One quad per pair of rows is all a narrow rectangle has.
+            let [lo, hi] = if width <= QUAD_W { [[0; 4], [0; 4]] } else { edges.spans(row, width, height) };
+            for p in 0..4 {
+                let y = row + 2 * p as u32;
+                if y >= height {
+                    break;
+                }
+                // Lanes 4-7 are the second row of the pair, if the rectangle has it.
+                let rows = if y + 1 < height { 0xff } else { 0x0f };
+                let (mut d, mut ev) = (lo[p], e);
+                if d <= hi[p] {
+                    for (ev, sx) in ev.iter_mut().zip(edges.sx) {
+                        *ev = _mm256_add_epi32(*ev, _mm256_set1_epi32(d * sx));
+                    }
+                }
+                while d <= hi[p] {
+                    // Lanes `j` and `j + 4` are column `d + j`: those in the rectangle.
+                    let columns = low_bits((width - d as u32).min(QUAD_W)) * 0x11;
+                    let outside = _mm256_or_si256(_mm256_or_si256(ev[0], ev[1]), ev[2]);
+                    let mask = !(_mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32) & rows & columns;
+                    if mask != 0 {
+                        let (e1, e2) = (_mm256_add_epi32(ev[1], bias[0]), _mm256_add_epi32(ev[2], bias[1]));
+                        let k = k0 + y as usize * w + d as usize;
+                        L::test_quad::<REVERSED, TIE>(&c, zb, k, mask, e1, e2);
+                    }
+                    for i in 0..3 {
+                        ev[i] = _mm256_add_epi32(ev[i], right[i]);
+                    }
+                    d += QUAD_W as i32;
+                }
+                for i in 0..3 {
+                    e[i] = _mm256_add_epi32(e[i], down[i]);
+                }
+            }
+            row += 8;
         }
     }
 }
@@ -201,6 +483,10 @@ fn draw<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
         }
         return;
     }
+    if let Some(edges) = QuadEdges::fit(ef, each(|i| e[i] + bias[i]), [x0, y0, x1, y1]) {
+        draw_quads::<L, REVERSED, TIE>(zb, idx, [x0, y0, x1, y1], &edges);
+        return;
+    }
     if x1 - x0 <= BLOCK && y1 - y0 <= BLOCK {
         test_partial::<L, REVERSED, TIE>(zb, &c, index(x0, y0), x1 - x0, y1 - y0, e);
         return;
@@ -270,6 +556,25 @@ fn to_f64_avx2(n: __m256i) -> __m256d {
     }
 }
 
+/// `n as f64` for any `|n| < 2^63`, per lane: the high half `n >> 32` (a signed `i32`) times
+/// `2^32` and the low half (an unsigned `u32`, through `2^52 + lo`) are exact in `f64`, and
+/// their sum is rounded once, which is `as f64`'s rounding.
+#[inline(always)]
+fn to_f64_exact_avx2(n: __m256i) -> __m256d {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe {
+        let odd = _mm256_setr_epi32(1, 3, 5, 7, 1, 3, 5, 7);
+        let hi = _mm256_cvtepi32_pd(_mm256_castsi256_si128(_mm256_permutevar8x32_epi32(n, odd)));
+        let lo = _mm256_or_si256(
+            _mm256_and_si256(n, _mm256_set1_epi64x(0xffff_ffff)),
+            _mm256_castpd_si256(_mm256_set1_pd(TWO_52)),
+        );
+        let lo = _mm256_sub_pd(_mm256_castsi256_pd(lo), _mm256_set1_pd(TWO_52));
+        _mm256_add_pd(_mm256_mul_pd(hi, _mm256_set1_pd(4_294_967_296.0)), lo)
+    }
+}
+
 /// Lane `j` (of 8) all ones iff bit `j` of `mask` is set.
 #[inline(always)]
 fn lanes_avx2(mask: u32) -> __m256i {
@@ -277,23 +582,6 @@ fn lanes_avx2(mask: u32) -> __m256i {
     unsafe {
         let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
         _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask as i32), bits), bits)
-    }
-}
-
-impl Avx2<'_> {
-    /// Depth of 4 pixels from their unbiased `e1`, `e2`: `(z0 + e1 dz0) + e2 dz1` as
-    /// [`SetupTri::depth`], rounded to `f32` (not yet clamped). Lanes of uncovered pixels may hold
-    /// garbage (edge values beyond 2^51); they are masked out by the caller.
-    #[inline(always)]
-    fn depth4(&self, e1: __m256i, e2: __m256i) -> __m128 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let d = _mm256_add_pd(
-                _mm256_add_pd(self.z0, _mm256_mul_pd(to_f64_avx2(e1), self.dz[0])),
-                _mm256_mul_pd(to_f64_avx2(e2), self.dz[1]),
-            );
-            _mm256_cvtpd_ps(d)
-        }
     }
 }
 
@@ -310,12 +598,18 @@ fn abs_ps(x: __m256) -> __m256 {
 /// An empty standard-depth entry (`cur = +inf`) is excluded (for any finite `d` the formula
 /// gives `inf <= inf`): the fragment beats it either way (see [`wins`]), and as a tie it would
 /// go through the scalar path for every first fragment of a pixel.
+///
+/// `max(|d|, |cur|)` is computed as `max(d, cur)`: both are `+inf`, in `[0, 1]` or `-0`
+/// (fragment depths are clamped to their triangle's range within `[0, 1]`, whose ends can be
+/// `-0`, and the empty depths are `+inf` and `0`), so the two differ only by the sign of a
+/// zero maximum, which makes `limit` `-0` instead of `+0`, and `diff <= limit` is the same for
+/// both (`diff >= 0`).
 #[inline(always)]
 fn tie_window<const REVERSED: bool>(d: __m256, cur: __m256, tie: __m256) -> __m256 {
     // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
     unsafe {
         let diff = abs_ps(_mm256_sub_ps(d, cur));
-        let limit = _mm256_mul_ps(tie, _mm256_max_ps(abs_ps(d), abs_ps(cur)));
+        let limit = _mm256_mul_ps(tie, _mm256_max_ps(d, cur));
         let in_window = _mm256_cmp_ps::<_CMP_LE_OQ>(diff, limit);
         if REVERSED {
             in_window
@@ -333,16 +627,22 @@ fn clamp_ps(d: __m256, lo: __m256, hi: __m256) -> __m256 {
     unsafe { _mm256_min_ps(_mm256_max_ps(d, lo), hi) }
 }
 
-/// The AVX2 backend: a row is two vectors of 4 `i64`.
-struct Avx2<'t> {
+/// 4 entries of a tile buffer from `k` on (bounds-checked).
+#[inline(always)]
+fn quad_of<T>(buf: &mut [T], k: usize) -> &mut [T; 4] {
+    (&mut buf[k..k + 4]).try_into().unwrap()
+}
+
+/// Tile index of lane `j` of a 4 x 2 quad from tile index `k` (see [`Lanes::test_quad`]).
+#[inline(always)]
+fn quad_index(k: usize, w: usize, j: usize) -> usize {
+    k + (j & 3) + (j >> 2) * w
+}
+
+/// The per-triangle constants of the AVX2 depth test.
+struct Depth2<'t> {
     tri: &'t SetupTri,
     idx: __m256i,
-    /// `[0, s, 2 s, 3 s]` and `4 s` for each edge's x step `s`.
-    off: [__m256i; 3],
-    step4: [__m256i; 3],
-    /// Each edge's y step and fill-rule bias, in every lane.
-    sy: [__m256i; 3],
-    bias: [__m256i; 3],
     z0: __m256d,
     dz: [__m256d; 2],
     /// The clamp range and the tie window, in every lane.
@@ -351,31 +651,113 @@ struct Avx2<'t> {
     tie: __m256,
 }
 
-impl<'t> Lanes<'t> for Avx2<'t> {
-    type Row = [__m256i; 2];
-    /// Edge values with `|e| >= 2^51` would not convert exactly (see [`MAGIC`]); covered samples
-    /// have `0 <= e_i <= area` ([`EdgeFns::area`]), so triangles with `area < 2^51` are safe.
-    /// Bigger ones (hundreds of thousands of pixels across: only guard-band triangles) take the
-    /// scalar path.
-    const MAX_AREA: i64 = 1 << 51;
-
+impl<'t> Depth2<'t> {
     #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+    fn new(tri: &'t SetupTri, idx: u32, tie: f32) -> Self {
         let (dz, [lo, hi]) = (tri.dz(), tri.range());
         // SAFETY: see `Lanes`.
         unsafe {
             Self {
                 tri,
                 idx: _mm256_set1_epi32(idx as i32),
-                off: each(|i| _mm256_setr_epi64x(0, ef.sx[i], 2 * ef.sx[i], 3 * ef.sx[i])),
-                step4: each(|i| _mm256_set1_epi64x(4 * ef.sx[i])),
-                sy: each(|i| _mm256_set1_epi64x(ef.sy[i])),
-                bias: each(|i| _mm256_set1_epi64x(ef.bias[i])),
                 z0: _mm256_set1_pd(tri.z0()),
                 dz: [_mm256_set1_pd(dz[0]), _mm256_set1_pd(dz[1])],
                 lo: _mm256_set1_ps(lo),
                 hi: _mm256_set1_ps(hi),
                 tie: _mm256_set1_ps(tie),
+            }
+        }
+    }
+
+    /// Depth of 4 pixels from their unbiased `e1`, `e2` (as `f64`): `(z0 + e1 dz0) + e2 dz1` as
+    /// [`SetupTri::depth`], rounded to `f32` (not yet clamped). Lanes of uncovered pixels may
+    /// hold garbage; they are masked out by the caller.
+    #[inline(always)]
+    fn depth4(&self, e1: __m256d, e2: __m256d) -> __m128 {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            let d = _mm256_add_pd(
+                _mm256_add_pd(self.z0, _mm256_mul_pd(e1, self.dz[0])),
+                _mm256_mul_pd(e2, self.dz[1]),
+            );
+            _mm256_cvtpd_ps(d)
+        }
+    }
+
+    /// The `covered` lanes (a lane mask) where the fragment, of depths `d`, replaces the z-buffer
+    /// entries `cur` (lane `j`: the pixel at tile index `index(j)`), as a lane mask.
+    #[inline(always)]
+    fn update<const REVERSED: bool, const TIE: bool>(
+        &self,
+        zb: &ZBuffer,
+        d: __m256,
+        cur: __m256,
+        covered: __m256i,
+        index: impl Fn(usize) -> usize,
+    ) -> __m256 {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            let closer = _mm256_castps_si256(if REVERSED {
+                _mm256_cmp_ps::<_CMP_GT_OQ>(d, cur)
+            } else {
+                _mm256_cmp_ps::<_CMP_LT_OQ>(d, cur)
+            });
+            // Lanes decided by the id: equal depths, or with `TIE` depths in the window (which
+            // the depth comparison then must not decide).
+            let tied = if TIE {
+                tie_window::<REVERSED>(d, cur, self.tie)
+            } else {
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(d, cur)
+            };
+            let ties = _mm256_and_si256(_mm256_castps_si256(tied), covered);
+            let mut update = if TIE {
+                _mm256_andnot_si256(ties, _mm256_and_si256(closer, covered))
+            } else {
+                _mm256_and_si256(closer, covered)
+            };
+            let ties = _mm256_movemask_ps(_mm256_castsi256_ps(ties)) as u32;
+            if ties != 0 {
+                let mut d_arr = [0.0f32; 8];
+                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
+                let won = tie_winners::<REVERSED, TIE>(zb, index, self.tri, &d_arr, ties);
+                update = _mm256_or_si256(update, lanes_avx2(won));
+            }
+            _mm256_castsi256_ps(update)
+        }
+    }
+}
+
+/// The AVX2 backend: a row is two vectors of 4 `i64`.
+struct Avx2<'t> {
+    depth: Depth2<'t>,
+    /// `[0, s, 2 s, 3 s]` and `4 s` for each edge's x step `s`.
+    off: [__m256i; 3],
+    step4: [__m256i; 3],
+    /// Each edge's y step and fill-rule bias, in every lane.
+    sy: [__m256i; 3],
+    bias: [__m256i; 3],
+    /// Whether edge values may reach `2^51` and need [`to_f64_exact_avx2`]: covered samples
+    /// have `0 <= e_i <= area` ([`EdgeFns::area`]), so only triangles with `area >= 2^51`
+    /// (hundreds of thousands of pixels across: guard-band triangles) do; [`to_f64_avx2`] is
+    /// exact for the others.
+    wide: bool,
+}
+
+impl<'t> Lanes<'t> for Avx2<'t> {
+    type Row = [__m256i; 2];
+    type Depth = Depth2<'t>;
+
+    #[inline(always)]
+    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            Self {
+                depth: Depth2::new(tri, idx, tie),
+                off: each(|i| _mm256_setr_epi64x(0, ef.sx[i], 2 * ef.sx[i], 3 * ef.sx[i])),
+                step4: each(|i| _mm256_set1_epi64x(4 * ef.sx[i])),
+                sy: each(|i| _mm256_set1_epi64x(ef.sy[i])),
+                bias: each(|i| _mm256_set1_epi64x(ef.bias[i])),
+                wide: ef.area >= 1 << 51,
             }
         }
     }
@@ -423,60 +805,79 @@ impl<'t> Lanes<'t> for Avx2<'t> {
         e1: Self::Row,
         e2: Self::Row,
     ) {
+        let c = &self.depth;
         // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
         unsafe {
-            let d = _mm256_set_m128(self.depth4(e1[1], e2[1]), self.depth4(e1[0], e2[0]));
-            let d = clamp_ps(d, self.lo, self.hi);
-
-            let covered = lanes_avx2(covered);
+            let (lo, hi) = if self.wide {
+                let f = to_f64_exact_avx2;
+                (c.depth4(f(e1[0]), f(e2[0])), c.depth4(f(e1[1]), f(e2[1])))
+            } else {
+                let f = to_f64_avx2;
+                (c.depth4(f(e1[0]), f(e2[0])), c.depth4(f(e1[1]), f(e2[1])))
+            };
+            let d = clamp_ps(_mm256_set_m128(hi, lo), c.lo, c.hi);
             let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
-            let closer = _mm256_castps_si256(if REVERSED {
-                _mm256_cmp_ps::<_CMP_GT_OQ>(d, cur)
-            } else {
-                _mm256_cmp_ps::<_CMP_LT_OQ>(d, cur)
-            });
-            // Lanes decided by the id: equal depths, or with `TIE` depths in the window (which
-            // the depth comparison then must not decide).
-            let tied = if TIE {
-                tie_window::<REVERSED>(d, cur, self.tie)
-            } else {
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(d, cur)
-            };
-            let ties = _mm256_and_si256(_mm256_castps_si256(tied), covered);
-            let mut update = if TIE {
-                _mm256_andnot_si256(ties, _mm256_and_si256(closer, covered))
-            } else {
-                _mm256_and_si256(closer, covered)
-            };
-            let ties = _mm256_movemask_ps(_mm256_castsi256_ps(ties)) as u32;
-            if ties != 0 {
-                let mut d_arr = [0.0f32; 8];
-                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
-                let won = tie_winners::<REVERSED, TIE>(zb, k, self.tri, &d_arr, ties);
-                update = _mm256_or_si256(update, lanes_avx2(won));
-            }
-            let update = _mm256_castsi256_ps(update);
+            let update = c.update::<REVERSED, TIE>(zb, d, cur, lanes_avx2(covered), |j| k + j);
             let depth = row_of(&mut zb.depth, k);
             _mm256_storeu_ps(depth.as_mut_ptr(), _mm256_blendv_ps(cur, d, update));
             let win = row_of(&mut zb.win, k);
             let old = _mm256_castsi256_ps(_mm256_loadu_si256(win.as_ptr().cast()));
-            let new = _mm256_blendv_ps(old, _mm256_castsi256_ps(self.idx), update);
+            let new = _mm256_blendv_ps(old, _mm256_castsi256_ps(c.idx), update);
             _mm256_storeu_si256(win.as_mut_ptr().cast(), _mm256_castps_si256(new));
+        }
+    }
+
+    #[inline(always)]
+    fn depth(tri: &'t SetupTri, idx: u32, tie: f32) -> Self::Depth {
+        Depth2::new(tri, idx, tie)
+    }
+
+    #[inline(always)]
+    fn test_quad<const REVERSED: bool, const TIE: bool>(
+        c: &Self::Depth,
+        zb: &mut ZBuffer<'t>,
+        k: usize,
+        covered: u32,
+        e1: __m256i,
+        e2: __m256i,
+    ) {
+        let w = zb.w;
+        // SAFETY: see `Lanes`; the loads and stores access the 4 elements of `quad_of` slices.
+        unsafe {
+            let half = |e: __m256i, h: bool| {
+                _mm256_cvtepi32_pd(if h {
+                    _mm256_extracti128_si256::<1>(e)
+                } else {
+                    _mm256_castsi256_si128(e)
+                })
+            };
+            let lo = c.depth4(half(e1, false), half(e2, false));
+            let hi = c.depth4(half(e1, true), half(e2, true));
+            let d = clamp_ps(_mm256_set_m128(hi, lo), c.lo, c.hi);
+            let load = |buf: &mut [f32], k: usize| _mm_loadu_ps(quad_of(buf, k).as_ptr());
+            let cur = _mm256_set_m128(load(&mut zb.depth, k + w), load(&mut zb.depth, k));
+            let update = c.update::<REVERSED, TIE>(zb, d, cur, lanes_avx2(covered), |j| quad_index(k, w, j));
+            let new = _mm256_blendv_ps(cur, d, update);
+            _mm_storeu_ps(quad_of(&mut zb.depth, k).as_mut_ptr(), _mm256_castps256_ps128(new));
+            _mm_storeu_ps(quad_of(&mut zb.depth, k + w).as_mut_ptr(), _mm256_extractf128_ps::<1>(new));
+            let load = |buf: &mut [u32], k: usize| {
+                _mm_castsi128_ps(_mm_loadu_si128(quad_of(buf, k).as_ptr().cast()))
+            };
+            let old = _mm256_set_m128(load(&mut zb.win, k + w), load(&mut zb.win, k));
+            let new = _mm256_castps_si256(_mm256_blendv_ps(old, _mm256_castsi256_ps(c.idx), update));
+            _mm_storeu_si128(quad_of(&mut zb.win, k).as_mut_ptr().cast(), _mm256_castsi256_si128(new));
+            _mm_storeu_si128(
+                quad_of(&mut zb.win, k + w).as_mut_ptr().cast(),
+                _mm256_extracti128_si256::<1>(new),
+            );
         }
     }
 }
 
-/// The AVX-512 backend: a row is one vector of 8 `i64`, masks are mask registers, and the
-/// `i64 -> f64` conversion is a single instruction rounding like `as f64`, so every triangle
-/// can take it.
-struct Avx512<'t> {
+/// The per-triangle constants of the AVX-512 depth test.
+struct Depth512<'t> {
     tri: &'t SetupTri,
     idx: __m256i,
-    /// `[0, s, .., 7 s]` for each edge's x step `s`.
-    off: [__m512i; 3],
-    /// Each edge's y step and fill-rule bias, in every lane.
-    sy: [__m512i; 3],
-    bias: [__m512i; 3],
     z0: __m512d,
     dz: [__m512d; 2],
     /// The clamp range and the tie window, in every lane.
@@ -485,28 +886,100 @@ struct Avx512<'t> {
     tie: __m256,
 }
 
-impl<'t> Lanes<'t> for Avx512<'t> {
-    type Row = __m512i;
-    const MAX_AREA: i64 = i64::MAX;
-
+impl<'t> Depth512<'t> {
     #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+    fn new(tri: &'t SetupTri, idx: u32, tie: f32) -> Self {
         let (dz, [lo, hi]) = (tri.dz(), tri.range());
         // SAFETY: see `Lanes`.
         unsafe {
-            let j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
             Self {
                 tri,
                 idx: _mm256_set1_epi32(idx as i32),
-                // Exact: |7 s| < 2^40 (module docs of `setup`).
-                off: each(|i| _mm512_mullo_epi64(j, _mm512_set1_epi64(ef.sx[i]))),
-                sy: each(|i| _mm512_set1_epi64(ef.sy[i])),
-                bias: each(|i| _mm512_set1_epi64(ef.bias[i])),
                 z0: _mm512_set1_pd(tri.z0()),
                 dz: [_mm512_set1_pd(dz[0]), _mm512_set1_pd(dz[1])],
                 lo: _mm256_set1_ps(lo),
                 hi: _mm256_set1_ps(hi),
                 tie: _mm256_set1_ps(tie),
+            }
+        }
+    }
+
+    /// `(z0 + e1 dz0) + e2 dz1` from the unbiased `e1`, `e2` as `f64`, as [`SetupTri::depth`],
+    /// rounded to `f32` and clamped.
+    #[inline(always)]
+    fn depth8(&self, e1: __m512d, e2: __m512d) -> __m256 {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            let d = _mm512_add_pd(
+                _mm512_add_pd(self.z0, _mm512_mul_pd(e1, self.dz[0])),
+                _mm512_mul_pd(e2, self.dz[1]),
+            );
+            clamp_ps(_mm512_cvtpd_ps(d), self.lo, self.hi)
+        }
+    }
+
+    /// The `covered` lanes where the fragment, of depths `d`, replaces the z-buffer entries
+    /// `cur` (lane `j`: the pixel at tile index `index(j)`), as in the AVX2 backend.
+    #[inline(always)]
+    fn update<const REVERSED: bool, const TIE: bool>(
+        &self,
+        zb: &ZBuffer,
+        d: __m256,
+        cur: __m256,
+        covered: __mmask8,
+        index: impl Fn(usize) -> usize,
+    ) -> __mmask8 {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            let closer = if REVERSED {
+                _mm256_mask_cmp_ps_mask::<_CMP_GT_OQ>(covered, d, cur)
+            } else {
+                _mm256_mask_cmp_ps_mask::<_CMP_LT_OQ>(covered, d, cur)
+            };
+            let (mut update, ties) = if TIE {
+                let ties = _mm256_movemask_ps(tie_window::<REVERSED>(d, cur, self.tie)) as __mmask8 & covered;
+                (closer & !ties, ties)
+            } else {
+                (closer, _mm256_mask_cmp_ps_mask::<_CMP_EQ_OQ>(covered, d, cur))
+            };
+            if ties != 0 {
+                let mut d_arr = [0.0f32; 8];
+                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
+                update |=
+                    tie_winners::<REVERSED, TIE>(zb, index, self.tri, &d_arr, u32::from(ties)) as __mmask8;
+            }
+            update
+        }
+    }
+}
+
+/// The AVX-512 backend: a row is one vector of 8 `i64`, masks are mask registers, and the
+/// `i64 -> f64` conversion is a single instruction rounding like `as f64`, so every triangle
+/// can take it.
+struct Avx512<'t> {
+    depth: Depth512<'t>,
+    /// `[0, s, .., 7 s]` for each edge's x step `s`.
+    off: [__m512i; 3],
+    /// Each edge's y step and fill-rule bias, in every lane.
+    sy: [__m512i; 3],
+    bias: [__m512i; 3],
+}
+
+impl<'t> Lanes<'t> for Avx512<'t> {
+    type Row = __m512i;
+    type Depth = Depth512<'t>;
+
+    #[inline(always)]
+    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            let j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+            Self {
+                depth: Depth512::new(tri, idx, tie),
+                // Exact: |7 s| < 2^40 (module docs of `setup`).
+                off: each(|i| _mm512_mullo_epi64(j, _mm512_set1_epi64(ef.sx[i]))),
+                sy: each(|i| _mm512_set1_epi64(ef.sy[i])),
+                bias: each(|i| _mm512_set1_epi64(ef.bias[i])),
             }
         }
     }
@@ -548,37 +1021,361 @@ impl<'t> Lanes<'t> for Avx512<'t> {
         e1: Self::Row,
         e2: Self::Row,
     ) {
+        let c = &self.depth;
         // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
         unsafe {
-            // `(z0 + e1 dz0) + e2 dz1`, as `SetupTri::depth` (the conversions round like
-            // `as f64`), rounded and clamped as in the AVX2 backend.
-            let d = _mm512_add_pd(
-                _mm512_add_pd(self.z0, _mm512_mul_pd(_mm512_cvtepi64_pd(e1), self.dz[0])),
-                _mm512_mul_pd(_mm512_cvtepi64_pd(e2), self.dz[1]),
-            );
-            let d = clamp_ps(_mm512_cvtpd_ps(d), self.lo, self.hi);
-
-            let covered = covered as __mmask8;
+            // The conversions round like `as f64`.
+            let d = c.depth8(_mm512_cvtepi64_pd(e1), _mm512_cvtepi64_pd(e2));
             let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
-            let closer = if REVERSED {
-                _mm256_mask_cmp_ps_mask::<_CMP_GT_OQ>(covered, d, cur)
-            } else {
-                _mm256_mask_cmp_ps_mask::<_CMP_LT_OQ>(covered, d, cur)
-            };
-            // As in the AVX2 backend.
-            let (mut update, ties) = if TIE {
-                let ties = _mm256_movemask_ps(tie_window::<REVERSED>(d, cur, self.tie)) as __mmask8 & covered;
-                (closer & !ties, ties)
-            } else {
-                (closer, _mm256_mask_cmp_ps_mask::<_CMP_EQ_OQ>(covered, d, cur))
-            };
-            if ties != 0 {
-                let mut d_arr = [0.0f32; 8];
-                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
-                update |= tie_winners::<REVERSED, TIE>(zb, k, self.tri, &d_arr, u32::from(ties)) as __mmask8;
-            }
+            let update = c.update::<REVERSED, TIE>(zb, d, cur, covered as __mmask8, |j| k + j);
             _mm256_mask_storeu_ps(row_of(&mut zb.depth, k).as_mut_ptr(), update, d);
-            _mm256_mask_storeu_epi32(row_of(&mut zb.win, k).as_mut_ptr().cast(), update, self.idx);
+            _mm256_mask_storeu_epi32(row_of(&mut zb.win, k).as_mut_ptr().cast(), update, c.idx);
+        }
+    }
+
+    #[inline(always)]
+    fn depth(tri: &'t SetupTri, idx: u32, tie: f32) -> Self::Depth {
+        Depth512::new(tri, idx, tie)
+    }
+
+    #[inline(always)]
+    fn test_quad<const REVERSED: bool, const TIE: bool>(
+        c: &Self::Depth,
+        zb: &mut ZBuffer<'t>,
+        k: usize,
+        covered: u32,
+        e1: __m256i,
+        e2: __m256i,
+    ) {
+        let w = zb.w;
+        // SAFETY: see `Lanes`; the loads and stores access the 4 elements of `quad_of` slices.
+        unsafe {
+            let d = c.depth8(_mm512_cvtepi32_pd(e1), _mm512_cvtepi32_pd(e2));
+            let (lo, hi) = (quad_of(&mut zb.depth, k).as_ptr(), quad_of(&mut zb.depth, k + w).as_ptr());
+            let cur = _mm256_set_m128(_mm_loadu_ps(hi), _mm_loadu_ps(lo));
+            let update = c.update::<REVERSED, TIE>(zb, d, cur, covered as __mmask8, |j| quad_index(k, w, j));
+            // Blended and stored whole rather than with masked stores: the next small triangle
+            // often reads these entries again, and a masked store cannot forward its data to a
+            // load (measured: 6 % less time on small triangles).
+            let new = _mm256_mask_blend_ps(update, cur, d);
+            _mm_storeu_ps(quad_of(&mut zb.depth, k).as_mut_ptr(), _mm256_castps256_ps128(new));
+            _mm_storeu_ps(quad_of(&mut zb.depth, k + w).as_mut_ptr(), _mm256_extractf128_ps::<1>(new));
+            let load = |buf: &mut [u32], k: usize| _mm_loadu_si128(quad_of(buf, k).as_ptr().cast());
+            let old = _mm256_set_m128i(load(&mut zb.win, k + w), load(&mut zb.win, k));
+            let new = _mm256_mask_blend_epi32(update, old, c.idx);
+            _mm_storeu_si128(quad_of(&mut zb.win, k).as_mut_ptr().cast(), _mm256_castsi256_si128(new));
+            _mm_storeu_si128(
+                quad_of(&mut zb.win, k + w).as_mut_ptr().cast(),
+                _mm256_extracti128_si256::<1>(new),
+            );
+        }
+    }
+}
+
+/// Resolves the tile with the AVX2 kernel: [`ZBuffer::resolve`]'s depths, ids and
+/// barycentrics, 8 pixels at a time ([`resolve_rows`]), emptying the z-buffer.
+#[target_feature(enable = "avx2")]
+pub(crate) fn resolve_avx2(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
+    resolve_rows::<false>(zb, depth, id, bary);
+}
+
+/// Resolves the tile with the AVX-512 kernel (see [`resolve_avx2`]).
+#[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
+pub(crate) fn resolve_avx512(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
+    resolve_rows::<true>(zb, depth, id, bary);
+}
+
+/// The resolve of [`resolve_avx2`] and [`resolve_avx512`] (`AVX512`): for every run of 8
+/// pixels of every row of the tile (fewer at the end of a row), the ids and barycentrics of
+/// [`resolve8_avx512`] or [`resolve8_avx2`] (called directly: a function passed as a parameter
+/// is not always inlined, and then cannot inline the intrinsics of its body), and the depths;
+/// then the run's z-buffer entries are emptied. That is every entry of the tile's rows, the
+/// spare row and the padding were never written (only rewritten with their values): the
+/// z-buffer is [`ZBuffer::clean`] afterwards.
+#[inline(always)]
+fn resolve_rows<const AVX512: bool>(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
+    let [tx0, ty0, ..] = zb.rect;
+    let w = zb.w;
+    // SAFETY: AVX2 is available (only called from `resolve_avx2` and `resolve_avx512`); the
+    // loads and stores access 8 elements of `row_of` slices, or of a chunk of exactly 8.
+    unsafe {
+        let empty = (_mm256_set1_epi32(zb.empty_bits() as i32), _mm256_set1_epi32(NONE as i32));
+        for (r, ((d_row, i_row), b_row)) in depth.into_iter().zip(id).zip(bary).enumerate() {
+            let chunks = d_row.chunks_mut(BLOCK as usize).zip(i_row.chunks_mut(BLOCK as usize));
+            for (c, ((d, i), b)) in chunks.zip(b_row.chunks_mut(BLOCK as usize)).enumerate() {
+                let k = r * w + c * BLOCK as usize;
+                let (x, y) = (tx0 + (c as u32) * BLOCK, ty0 + r as u32);
+                if AVX512 {
+                    resolve8_avx512(zb, k, x, y, i, b);
+                } else {
+                    resolve8_avx2(zb, k, x, y, i, b);
+                }
+                let cur = _mm256_loadu_si256(row_of(&mut zb.depth, k).as_ptr().cast());
+                if d.len() == BLOCK as usize {
+                    _mm256_storeu_si256(d.as_mut_ptr().cast(), cur);
+                    _mm256_storeu_si256(row_of(&mut zb.depth, k).as_mut_ptr().cast(), empty.0);
+                    _mm256_storeu_si256(row_of(&mut zb.win, k).as_mut_ptr().cast(), empty.1);
+                } else {
+                    let n = d.len();
+                    d.write_copy_of_slice(&zb.depth[k..k + n]);
+                    let empty = f32::from_bits(zb.empty_bits());
+                    zb.depth[k..k + n].fill(empty);
+                    zb.win[k..k + n].fill(NONE);
+                }
+            }
+        }
+    }
+    zb.clean = true;
+}
+
+/// Fixed-point x of the centres of the 8 pixels from `(x, y)` on, and y of row `y`, in every
+/// lane (see [`crate::setup`]): below `2^24 + 2^11` for pixel coordinates below
+/// `MAX_TARGET_DIM = 2^16`, so `i32`.
+#[inline(always)]
+fn centres(x: u32, y: u32) -> (__m256i, __m256i) {
+    let c = |p: u32| (i64::from(p) * SUBPIXEL_ONE + HALF_PIXEL) as i32;
+    let one = SUBPIXEL_ONE as i32;
+    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
+    unsafe {
+        let steps = _mm256_setr_epi32(0, one, 2 * one, 3 * one, 4 * one, 5 * one, 6 * one, 7 * one);
+        (_mm256_add_epi32(_mm256_set1_epi32(c(x)), steps), _mm256_set1_epi32(c(y)))
+    }
+}
+
+/// The vertices, ids and perspective constants of the winners of 8 pixels, one per lane (see
+/// [`resolve8_avx512`]).
+struct Winners<V, P> {
+    /// `[x0, y0, x1, y1, x2, y2]`, fixed point.
+    v: [V; 6],
+    id: V,
+    /// `persp[i][c]` of [`SetupTri::persp`] at `3 i + c`.
+    p: [P; 9],
+}
+
+/// Edge `a -> b` (the edge opposite vertex `i` is `(i + 1) % 3 -> (i + 2) % 3`, as in
+/// [`EdgeFns::new`]) as its coordinate differences, `[d.x, d.y, p.y - a.y, p.x - a.x]` at the
+/// pixel centres `(px, py)`, each lane in `i32` (below `2^29` in magnitude).
+#[inline(always)]
+fn edge_terms(v: &[__m256i; 6], a: usize, b: usize, px: __m256i, py: __m256i) -> [__m256i; 4] {
+    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
+    unsafe {
+        let (ax, ay) = (v[2 * a], v[2 * a + 1]);
+        [
+            _mm256_sub_epi32(v[2 * b], ax),
+            _mm256_sub_epi32(v[2 * b + 1], ay),
+            _mm256_sub_epi32(py, ay),
+            _mm256_sub_epi32(px, ax),
+        ]
+    }
+}
+
+/// `d.x (p.y - a.y) - d.y (p.x - a.x)` from [`edge_terms`]: [`EdgeFns::at_pixel`], exact (each
+/// product of two `i32` is exact in `i64`, and the edge function is below `2^60`), as `f64`
+/// rounded like `as f64`.
+#[inline(always)]
+fn edge_avx512(t: [__m256i; 4]) -> __m512d {
+    // SAFETY: only called from AVX-512 code (see `Lanes`).
+    unsafe {
+        let wide = |r| _mm512_cvtepi32_epi64(r);
+        let [dx, dy, ry, rx] = [wide(t[0]), wide(t[1]), wide(t[2]), wide(t[3])];
+        _mm512_cvtepi64_pd(_mm512_sub_epi64(_mm512_mul_epi32(dx, ry), _mm512_mul_epi32(dy, rx)))
+    }
+}
+
+/// `(e0 q0 + e1 q1) + e2 q2`: a sum of [`SetupTri::bary`], in its order.
+#[inline(always)]
+fn dot_avx512(e: &[__m512d; 3], q: [__m512d; 3]) -> __m512d {
+    // SAFETY: only called from AVX-512 code (see `Lanes`).
+    unsafe {
+        _mm512_add_pd(
+            _mm512_add_pd(_mm512_mul_pd(e[0], q[0]), _mm512_mul_pd(e[1], q[1])),
+            _mm512_mul_pd(e[2], q[2]),
+        )
+    }
+}
+
+/// The ids and barycentrics of [`ZBuffer::resolve`] for the `n = id.len() <= 8` pixels of a
+/// row from tile index `k`, pixel `(x, y)`, on, with AVX-512.
+///
+/// The pixels' winners are found by comparing the 8 entries of `zb.win` with each distinct
+/// winner in turn (a few per run of 8 for small triangles, one for large ones), which blends its
+/// vertices, id and perspective constants into the lanes it won. Then, per lane, the exact
+/// integer edge functions at the pixel centre ([`edge_terms`]) and [`SetupTri::bary`]'s `f64`
+/// operations, in its order.
+#[inline(always)]
+fn resolve8_avx512(
+    zb: &ZBuffer,
+    k: usize,
+    x: u32,
+    y: u32,
+    id: &mut [MaybeUninit<u32>],
+    bary: &mut [MaybeUninit<[f32; 2]>],
+) {
+    let n = id.len();
+    // SAFETY: see `Lanes` (only called from `resolve_avx512`); the loads read the 8 elements of
+    // `win[k..k + 8]` (bounds-checked), the masked stores the first `n` elements of `id` and
+    // `bary`.
+    unsafe {
+        let wins = _mm256_loadu_si256(zb.win[k..k + 8].as_ptr().cast());
+        let live = _mm256_cmpneq_epi32_mask(wins, _mm256_set1_epi32(NONE as i32)) & low_bits(n as u32) as u8;
+        let mut w = Winners {
+            v: [_mm256_setzero_si256(); 6],
+            id: _mm256_set1_epi32(EMPTY_ID as i32),
+            p: [_mm256_setzero_ps(); 9],
+        };
+        let mut rem = live;
+        while rem != 0 {
+            let win = zb.win[k + rem.trailing_zeros() as usize];
+            let m = _mm256_mask_cmpeq_epi32_mask(rem, wins, _mm256_set1_epi32(win as i32));
+            rem &= !m;
+            let tri = zb.tris[win as usize];
+            for f in 0..6 {
+                w.v[f] = _mm256_mask_set1_epi32(w.v[f], m, tri.v[f / 2][f % 2]);
+            }
+            w.id = _mm256_mask_set1_epi32(w.id, m, tri.id as i32);
+            let persp = tri.persp();
+            for f in 0..9 {
+                w.p[f] = _mm256_mask_mov_ps(w.p[f], m, _mm256_set1_ps(persp[f / 3][f % 3]));
+            }
+        }
+        let (px, py) = centres(x, y);
+        let e = [
+            edge_avx512(edge_terms(&w.v, 1, 2, px, py)),
+            edge_avx512(edge_terms(&w.v, 2, 0, px, py)),
+            edge_avx512(edge_terms(&w.v, 0, 1, px, py)),
+        ];
+        let mut q = [_mm512_setzero_pd(); 9];
+        for (q, p) in q.iter_mut().zip(w.p) {
+            *q = _mm512_cvtps_pd(p);
+        }
+        let den = dot_avx512(&e, [q[0], q[3], q[6]]);
+        // `!(den <= 0)`: the lanes `SetupTri::bary` divides in (the others are `+0`).
+        let ok = _mm512_mask_cmp_pd_mask::<_CMP_NLE_UQ>(live, den, _mm512_setzero_pd());
+        let b1 = _mm512_cvtpd_ps(_mm512_maskz_div_pd(ok, dot_avx512(&e, [q[1], q[4], q[7]]), den));
+        let b2 = _mm512_cvtpd_ps(_mm512_maskz_div_pd(ok, dot_avx512(&e, [q[2], q[5], q[8]]), den));
+        let pairs = _mm512_permutex2var_ps(
+            _mm512_castps256_ps512(b1),
+            _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23),
+            _mm512_castps256_ps512(b2),
+        );
+        _mm256_mask_storeu_epi32(id.as_mut_ptr().cast(), low_bits(n as u32) as u8, w.id);
+        _mm512_mask_storeu_ps(bary.as_mut_ptr().cast(), low_bits(2 * n as u32) as u16, pairs);
+    }
+}
+
+/// Lanes 0-3 (`H = 0`) or 4-7 (`H = 1`) of 8 `i32`, sign-extended to `i64`.
+#[inline(always)]
+fn half_epi64<const H: i32>(r: __m256i) -> __m256i {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe { _mm256_cvtepi32_epi64(_mm256_extracti128_si256::<H>(r)) }
+}
+
+/// [`edge_avx512`] for lanes `4 H..4 H + 4`, as `i64`.
+#[inline(always)]
+fn edge_avx2<const H: i32>(t: [__m256i; 4]) -> __m256i {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe {
+        let [dx, dy, ry, rx] =
+            [half_epi64::<H>(t[0]), half_epi64::<H>(t[1]), half_epi64::<H>(t[2]), half_epi64::<H>(t[3])];
+        _mm256_sub_epi64(_mm256_mul_epi32(dx, ry), _mm256_mul_epi32(dy, rx))
+    }
+}
+
+/// [`dot_avx512`] on 4 lanes.
+#[inline(always)]
+fn dot_avx2(e: &[__m256d; 3], q: [__m256d; 3]) -> __m256d {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe {
+        _mm256_add_pd(
+            _mm256_add_pd(_mm256_mul_pd(e[0], q[0]), _mm256_mul_pd(e[1], q[1])),
+            _mm256_mul_pd(e[2], q[2]),
+        )
+    }
+}
+
+/// The barycentric pairs `[b1, b2]` of lanes `4 H..4 H + 4` of [`resolve8_avx2`].
+#[inline(always)]
+fn bary4_avx2<const H: i32>(w: &Winners<__m256i, __m256>, live: __m256i, px: __m256i, py: __m256i) -> __m256 {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe {
+        let e = [
+            edge_avx2::<H>(edge_terms(&w.v, 1, 2, px, py)),
+            edge_avx2::<H>(edge_terms(&w.v, 2, 0, px, py)),
+            edge_avx2::<H>(edge_terms(&w.v, 0, 1, px, py)),
+        ];
+        // Covered samples have `0 <= e_i`: a live lane converts exactly with `to_f64_avx2` iff no
+        // bit from 51 on is set; otherwise (guard-band sized triangles) with the longer
+        // `to_f64_exact_avx2`.
+        let live = half_epi64::<H>(live);
+        let big = _mm256_and_si256(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]), live);
+        let e = if _mm256_testz_si256(big, _mm256_set1_epi64x(!((1 << 51) - 1))) != 0 {
+            [to_f64_avx2(e[0]), to_f64_avx2(e[1]), to_f64_avx2(e[2])]
+        } else {
+            [to_f64_exact_avx2(e[0]), to_f64_exact_avx2(e[1]), to_f64_exact_avx2(e[2])]
+        };
+        let mut q = [_mm256_setzero_pd(); 9];
+        for (q, p) in q.iter_mut().zip(w.p) {
+            *q = _mm256_cvtps_pd(_mm256_extractf128_ps::<H>(p));
+        }
+        let den = dot_avx2(&e, [q[0], q[3], q[6]]);
+        let ok =
+            _mm256_and_pd(_mm256_cmp_pd::<_CMP_NLE_UQ>(den, _mm256_setzero_pd()), _mm256_castsi256_pd(live));
+        let b1 = _mm256_cvtpd_ps(_mm256_and_pd(_mm256_div_pd(dot_avx2(&e, [q[1], q[4], q[7]]), den), ok));
+        let b2 = _mm256_cvtpd_ps(_mm256_and_pd(_mm256_div_pd(dot_avx2(&e, [q[2], q[5], q[8]]), den), ok));
+        _mm256_set_m128(_mm_unpackhi_ps(b1, b2), _mm_unpacklo_ps(b1, b2))
+    }
+}
+
+/// [`resolve8_avx512`] with AVX2: masks are vectors, and the `f64` work is done in two halves
+/// of 4 lanes ([`bary4_avx2`]).
+#[inline(always)]
+fn resolve8_avx2(
+    zb: &ZBuffer,
+    k: usize,
+    x: u32,
+    y: u32,
+    id: &mut [MaybeUninit<u32>],
+    bary: &mut [MaybeUninit<[f32; 2]>],
+) {
+    let n = id.len();
+    // SAFETY: see `Lanes` (only called from `resolve_avx2`); the loads read the 8 elements of
+    // `win[k..k + 8]` (bounds-checked), the stores 8 elements of arrays or of `id` and `bary`
+    // (`n == 8`).
+    unsafe {
+        let wins = _mm256_loadu_si256(zb.win[k..k + 8].as_ptr().cast());
+        let empty = _mm256_cmpeq_epi32(wins, _mm256_set1_epi32(NONE as i32));
+        let live = _mm256_andnot_si256(empty, lanes_avx2(low_bits(n as u32)));
+        let mut w = Winners {
+            v: [_mm256_setzero_si256(); 6],
+            id: _mm256_set1_epi32(EMPTY_ID as i32),
+            p: [_mm256_setzero_ps(); 9],
+        };
+        let mut rem = _mm256_movemask_ps(_mm256_castsi256_ps(live)) as u32;
+        while rem != 0 {
+            let win = zb.win[k + rem.trailing_zeros() as usize];
+            let m = _mm256_cmpeq_epi32(wins, _mm256_set1_epi32(win as i32));
+            rem &= !(_mm256_movemask_ps(_mm256_castsi256_ps(m)) as u32);
+            let tri = zb.tris[win as usize];
+            for f in 0..6 {
+                w.v[f] = _mm256_blendv_epi8(w.v[f], _mm256_set1_epi32(tri.v[f / 2][f % 2]), m);
+            }
+            w.id = _mm256_blendv_epi8(w.id, _mm256_set1_epi32(tri.id as i32), m);
+            let persp = tri.persp();
+            for f in 0..9 {
+                let c = _mm256_set1_ps(persp[f / 3][f % 3]);
+                w.p[f] = _mm256_blendv_ps(w.p[f], c, _mm256_castsi256_ps(m));
+            }
+        }
+        let (px, py) = centres(x, y);
+        let (lo, hi) = (bary4_avx2::<0>(&w, live, px, py), bary4_avx2::<1>(&w, live, px, py));
+        let mut pairs = [[0.0f32; 2]; 8];
+        _mm256_storeu_ps(pairs.as_mut_ptr().cast(), lo);
+        _mm256_storeu_ps(pairs[4..].as_mut_ptr().cast(), hi);
+        let mut ids = [0u32; 8];
+        _mm256_storeu_si256(ids.as_mut_ptr().cast(), w.id);
+        for j in 0..n {
+            id[j].write(ids[j]);
+            bary[j].write(pairs[j]);
         }
     }
 }

@@ -16,39 +16,15 @@
 
 use rayon::prelude::*;
 
-use crate::EMPTY_ID;
-use crate::clip::ClipScratch;
 use crate::edge::BLOCK;
-use crate::setup::{SetupContext, SetupTri, setup_triangle};
+use crate::setup::{SetupContext, SetupTri, setup_chunk};
+use crate::zbuf::Isa;
 
 use glam::Vec4;
 
 /// Input triangles per parallel setup task: large enough to amortise task overhead, small enough
 /// to balance a few hundred thousand triangles over the cores.
 const SETUP_CHUNK: usize = 2048;
-
-/// How many input triangles ahead setup asks for: reading the input (48 bytes per triangle) is
-/// a large part of the setup time of scenes with many rejected triangles, and the hardware
-/// prefetcher alone leaves the core waiting.
-const PREFETCH_AHEAD: usize = 24;
-
-/// Starts loading an input triangle into the cache. A hint only.
-#[inline(always)]
-fn prefetch_input(tri: &[Vec4; 3]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let p: *const i8 = (tri as *const [Vec4; 3]).cast();
-        // SAFETY: prefetching has no effect on memory or on the program's state; SSE is part of
-        // x86-64.
-        unsafe {
-            _mm_prefetch::<_MM_HINT_T0>(p);
-            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<[Vec4; 3]>() - 1));
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = tri;
-}
 
 /// Rounds a requested tile size up to a multiple of the block size, within `[BLOCK, 4096]`.
 pub(crate) fn effective_tile_size(requested: u32) -> u32 {
@@ -172,24 +148,33 @@ pub(crate) struct Binned {
 }
 
 impl Binned {
-    /// Sets up and bins all triangles in parallel. With `ids`, triangles with id [`EMPTY_ID`] are
-    /// dropped; `ids: None` uses id 0 for all.
-    pub fn new(tris: &[[Vec4; 3]], ids: Option<&[u32]>, ctx: &SetupContext, tile_size: u32) -> Self {
+    /// Sets up and bins all triangles in parallel, with the setup kernel `isa`. With `ids`,
+    /// triangles with id [`EMPTY_ID`](crate::EMPTY_ID) are dropped; `ids: None` uses id 0 for
+    /// all.
+    pub fn new(
+        tris: &[[Vec4; 3]],
+        ids: Option<&[u32]>,
+        ctx: &SetupContext,
+        tile_size: u32,
+        isa: Isa,
+    ) -> Self {
         let grid = TileGrid::new(ctx.width, ctx.height, effective_tile_size(tile_size));
         let chunks = tris
             .par_chunks(SETUP_CHUNK)
             .enumerate()
             .map(|(c, chunk)| {
                 let mut out = Vec::with_capacity(chunk.len());
-                let mut scratch = ClipScratch::new();
-                for (k, tri) in chunk.iter().enumerate() {
-                    if let Some(ahead) = chunk.get(k + PREFETCH_AHEAD) {
-                        prefetch_input(ahead);
-                    }
-                    let id = ids.map_or(0, |ids| ids[c * SETUP_CHUNK + k]);
-                    if id != EMPTY_ID {
-                        setup_triangle(tri, id, ctx, &mut scratch, &mut out);
-                    }
+                let ids = ids.map(|ids| &ids[c * SETUP_CHUNK..][..chunk.len()]);
+                match isa {
+                    Isa::Scalar => setup_chunk(chunk, ids, ctx, &mut out),
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
+                    Isa::Avx2 => unsafe { crate::setup_simd::setup_chunk_avx2(chunk, ids, ctx, &mut out) },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
+                    Isa::Avx512 => unsafe {
+                        crate::setup_simd::setup_chunk_avx512(chunk, ids, ctx, &mut out)
+                    },
                 }
                 Chunk::new(out, &grid)
             })

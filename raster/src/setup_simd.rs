@@ -1023,17 +1023,7 @@ mod tests {
     use crate::setup::setup_chunk;
     use crate::zbuf::Isa;
 
-    /// xorshift64*: a deterministic PRNG.
-    struct Rng(u64);
-
-    impl Rng {
-        fn f32(&mut self) -> f32 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
+    use crate::test_rng::Rng;
 
     /// Triangles of every kind the setup treats differently, in random order: sub-pixel to
     /// screen-filling, slivers and degenerate ones, both orientations, crossing the near or far

@@ -372,17 +372,7 @@ mod tests {
     use super::*;
     use crate::setup::SetupContext;
 
-    /// xorshift64*: a deterministic PRNG for test scenes.
-    struct Rng(u64);
-
-    impl Rng {
-        fn f32(&mut self) -> f32 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
+    use crate::test_rng::Rng;
 
     /// Triangles of every size class the kernels treat differently: sub-pixel, a few pixels, 8x8
     /// blocks, tile-filling, guard-band sized (edge values beyond 2^51), crossing the near plane,

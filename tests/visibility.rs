@@ -208,3 +208,36 @@ fn raster_visibility_is_the_same_for_one_and_two_threads() {
         };
     assert!(run(1).pixels == run(2).pixels);
 }
+
+/// Frustum culling of triangle clusters (`render::cull`) removes only triangles that cover no
+/// pixel: on the conference room, where it drops most clusters, the raster pass gives exactly
+/// the ids of rasterizing every triangle; and a second frame, drawn into the buffers the first
+/// one left, is identical.
+#[test]
+fn cluster_culling_and_buffer_reuse_change_no_pixel() {
+    let mut scene = hyrt::scene::load(root().join("scenes/conference.toml").to_str().unwrap()).unwrap();
+    scene.settings.width = 640;
+    scene.settings.height = 480;
+    let r = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
+    let mut visible = Vec::new();
+    r.clusters.visible(&r.camera, r.raster_near, &mut visible);
+    assert!(visible.len() * 2 < r.clusters.len(), "{} of {} clusters kept", visible.len(), r.clusters.len());
+
+    let (g, st) = r.visibility();
+    assert_eq!(st.rays.primary, 0, "no pixel needed a fallback ray");
+    let clip: Vec<[glam::Vec4; 3]> = scene
+        .positions
+        .iter()
+        .map(|t| t.map(|p| hyrt::render::visibility::to_clip(&r.camera, r.raster_near, p)))
+        .collect();
+    let ids: Vec<u32> = (0..clip.len() as u32).collect();
+    let opts = hyrt_raster::RasterOptions {
+        reversed_z: true,
+        depth_tie: hyrt_tracer::DEPTH_TIE,
+        ..Default::default()
+    };
+    let all = hyrt_raster::rasterize(&clip, &ids, 640, 480, &opts);
+    let differ = g.iter().zip(&all.id).filter(|(h, i)| id(h) != **i).count();
+    assert_eq!(differ, 0, "culling changed {differ} pixels");
+    assert!(r.visibility().0 == g, "the second frame differs");
+}

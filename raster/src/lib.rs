@@ -114,7 +114,7 @@ pub const SUBPIXEL_BITS: u32 = setup::SUBPIXEL_BITS;
 
 /// Result of [`rasterize`]: row-major per-pixel buffers of `width * height` elements
 /// (index `y * width + x`, row 0 at the top).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Target {
     /// Width in pixels.
     pub width: u32,
@@ -127,7 +127,8 @@ pub struct Target {
     pub id: Vec<u32>,
     /// Perspective-correct barycentrics `(b1, b2)` of the pixel centre in the visible triangle
     /// (`b0 = 1 - b1 - b2`), relative to its original, unclipped vertices, interpolated over the
-    /// snapped vertex positions (crate docs); `[0, 0]` when empty.
+    /// snapped vertex positions (crate docs); `[0, 0]` when empty. Empty (length 0) when
+    /// rasterized with [`RasterOptions::barycentrics`] off.
     pub bary: Vec<[f32; 2]>,
 }
 
@@ -190,11 +191,16 @@ pub struct RasterOptions {
     /// `0`. Default `0.0`: exact comparison, equal depths go to the smaller id. Values `<= 0` and
     /// NaN mean `0`; `+inf` means every pair of fragments is a tie.
     pub depth_tie: f32,
+    /// Compute [`Target::bary`] (used by [`rasterize`] only). Default `true`. Callers that
+    /// recompute hit points from the ids (as the renderer does, exactly, from each pixel's ray)
+    /// turn it off: the buffer is left empty, and the per-pixel divisions and the 8 bytes per
+    /// pixel of writes are saved.
+    pub barycentrics: bool,
 }
 
 impl Default for RasterOptions {
     fn default() -> Self {
-        Self { tile_size: 64, cull_backfaces: false, reversed_z: false, depth_tie: 0.0 }
+        Self { tile_size: 64, cull_backfaces: false, reversed_z: false, depth_tie: 0.0, barycentrics: true }
     }
 }
 
@@ -228,21 +234,69 @@ fn check_dims(width: u32, height: u32) {
 /// `height` of 0 gives empty buffers. The result is identical for any rayon thread count and
 /// tile size, and with `depth_tie = 0` for any triangle order (for unique ids).
 ///
+/// Allocates its working memory and the target on every call; to draw frame after frame, keep
+/// a [`Rasterizer`] and a [`Target`] instead.
+///
 /// # Panics
 ///
 /// If `tris.len() != ids.len()` or a dimension exceeds [`MAX_TARGET_DIM`].
 pub fn rasterize(tris: &[[Vec4; 3]], ids: &[u32], width: u32, height: u32, opts: &RasterOptions) -> Target {
-    assert_eq!(tris.len(), ids.len(), "one id per triangle");
-    check_dims(width, height);
-    if width == 0 || height == 0 {
-        return Target::empty(width, height);
+    let mut target = Target::empty(0, 0);
+    Rasterizer::new().rasterize_into(tris, ids, width, height, opts, &mut target);
+    target
+}
+
+/// The working memory of [`rasterize`] (set-up triangles and tile bins), kept between frames.
+///
+/// Why: the bins and set-up triangles of a frame are megabytes; allocated afresh each frame, the
+/// allocator maps and unmaps them and every page faults again, which measured a third of the
+/// single-threaded frame time of a 70k-triangle scene. Results do not depend on what was drawn
+/// before.
+#[derive(Default)]
+pub struct Rasterizer {
+    chunks: Vec<tile::Chunk>,
+}
+
+impl std::fmt::Debug for Rasterizer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Rasterizer").field("chunks", &self.chunks.len()).finish_non_exhaustive()
     }
-    let ctx = SetupContext::new(width, height, opts.cull_backfaces);
-    let isa = zbuf::Isa::detect();
-    let binned = tile::Binned::new(tris, Some(ids), &ctx, opts.tile_size, isa);
-    // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
-    let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
-    zbuf::render(&binned, opts.reversed_z, tie, isa)
+}
+
+impl Rasterizer {
+    /// A rasterizer with no memory reserved yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// [`rasterize`] into `target`, whose buffers are reused (resized to `width x height`; every
+    /// element is overwritten, whatever it held). Same result as [`rasterize`].
+    ///
+    /// # Panics
+    ///
+    /// If `tris.len() != ids.len()` or a dimension exceeds [`MAX_TARGET_DIM`].
+    pub fn rasterize_into(
+        &mut self,
+        tris: &[[Vec4; 3]],
+        ids: &[u32],
+        width: u32,
+        height: u32,
+        opts: &RasterOptions,
+        target: &mut Target,
+    ) {
+        assert_eq!(tris.len(), ids.len(), "one id per triangle");
+        check_dims(width, height);
+        if width == 0 || height == 0 {
+            *target = Target::empty(width, height);
+            return;
+        }
+        let ctx = SetupContext::new(width, height, opts.cull_backfaces);
+        let isa = zbuf::Isa::detect();
+        let binned = tile::Binned::new(&mut self.chunks, tris, Some(ids), &ctx, opts.tile_size, isa);
+        // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
+        let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
+        zbuf::render(&binned, opts.reversed_z, tie, opts.barycentrics, isa, target);
+    }
 }
 
 /// Counts, per pixel, how many triangles cover the pixel centre (no depth test), with exactly the
@@ -261,7 +315,8 @@ pub fn coverage_count(tris: &[[Vec4; 3]], width: u32, height: u32, opts: &Raster
         return Vec::new();
     }
     let ctx = SetupContext::new(width, height, opts.cull_backfaces);
-    let binned = tile::Binned::new(tris, None, &ctx, opts.tile_size, zbuf::Isa::detect());
+    let mut chunks = Vec::new();
+    let binned = tile::Binned::new(&mut chunks, tris, None, &ctx, opts.tile_size, zbuf::Isa::detect());
     let grid = binned.grid;
     let mut count = vec![0u32; width as usize * height as usize];
     grid.split(&mut count).into_par_iter().enumerate().for_each(|(t, mut rows)| {

@@ -100,20 +100,27 @@ impl TileGrid {
     }
 }
 
-/// The set-up triangles of one chunk of the input, binned by tile.
-struct Chunk {
+/// The set-up triangles of one chunk of the input, binned by tile. Its vectors are kept by a
+/// [`crate::Rasterizer`] and reused frame after frame: allocating them afresh costs page faults
+/// (a third of the frame, measured) once they are large enough to be mapped and unmapped.
+#[derive(Default)]
+pub(crate) struct Chunk {
     tris: Vec<SetupTri>,
     /// Triangles overlapping tile `t`: `items[start[t]..start[t + 1]]`, indices into `tris` in
     /// increasing order.
     start: Vec<u32>,
     items: Vec<u32>,
+    /// Scratch of the counting sort.
+    fill: Vec<u32>,
 }
 
 impl Chunk {
-    /// Bins `tris` with a counting sort (two passes over the tile ranges).
-    fn new(tris: Vec<SetupTri>, grid: &TileGrid) -> Self {
-        let mut start = vec![0u32; grid.count() + 1];
-        for tri in &tris {
+    /// Bins `self.tris` with a counting sort (two passes over the tile ranges).
+    fn bin(&mut self, grid: &TileGrid) {
+        let start = &mut self.start;
+        start.clear();
+        start.resize(grid.count() + 1, 0);
+        for tri in &self.tris {
             let [tx0, ty0, tx1, ty1] = grid.tiles_of(tri.bbox);
             for ty in ty0..=ty1 {
                 let row = (ty * grid.tiles_x) as usize;
@@ -125,33 +132,35 @@ impl Chunk {
         for t in 0..grid.count() {
             start[t + 1] += start[t];
         }
-        let mut fill = start.clone();
-        let mut items = vec![0u32; start[grid.count()] as usize];
-        for (i, tri) in tris.iter().enumerate() {
+        self.fill.clear();
+        self.fill.extend_from_slice(start);
+        self.items.clear();
+        self.items.resize(start[grid.count()] as usize, 0);
+        for (i, tri) in self.tris.iter().enumerate() {
             let [tx0, ty0, tx1, ty1] = grid.tiles_of(tri.bbox);
             for ty in ty0..=ty1 {
                 let row = (ty * grid.tiles_x) as usize;
                 for t in row + tx0 as usize..=row + tx1 as usize {
-                    items[fill[t] as usize] = i as u32;
-                    fill[t] += 1;
+                    self.items[self.fill[t] as usize] = i as u32;
+                    self.fill[t] += 1;
                 }
             }
         }
-        Self { tris, start, items }
     }
 }
 
 /// All set-up triangles, binned into the tiles of `grid`.
-pub(crate) struct Binned {
+pub(crate) struct Binned<'c> {
     pub grid: TileGrid,
-    chunks: Vec<Chunk>,
+    chunks: &'c [Chunk],
 }
 
-impl Binned {
-    /// Sets up and bins all triangles in parallel, with the setup kernel `isa`. With `ids`,
-    /// triangles with id [`EMPTY_ID`](crate::EMPTY_ID) are dropped; `ids: None` uses id 0 for
-    /// all.
+impl<'c> Binned<'c> {
+    /// Sets up and bins all triangles in parallel, with the setup kernel `isa`, into `chunks`
+    /// (grown as needed, reused otherwise). With `ids`, triangles with id
+    /// [`EMPTY_ID`](crate::EMPTY_ID) are dropped; `ids: None` uses id 0 for all.
     pub fn new(
+        chunks: &'c mut Vec<Chunk>,
         tris: &[[Vec4; 3]],
         ids: Option<&[u32]>,
         ctx: &SetupContext,
@@ -159,31 +168,34 @@ impl Binned {
         isa: Isa,
     ) -> Self {
         let grid = TileGrid::new(ctx.width, ctx.height, effective_tile_size(tile_size));
-        let chunks = tris
-            .par_chunks(SETUP_CHUNK)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let mut out = Vec::with_capacity(chunk.len());
-                let ids = ids.map(|ids| &ids[c * SETUP_CHUNK..][..chunk.len()]);
+        let n = tris.len().div_ceil(SETUP_CHUNK);
+        if chunks.len() < n {
+            chunks.resize_with(n, Chunk::default);
+        }
+        let chunks = &mut chunks[..n];
+        chunks.par_iter_mut().zip(tris.par_chunks(SETUP_CHUNK)).enumerate().for_each(
+            |(c, (chunk, input))| {
+                let out = &mut chunk.tris;
+                out.clear();
+                out.reserve(input.len());
+                let ids = ids.map(|ids| &ids[c * SETUP_CHUNK..][..input.len()]);
                 match isa {
-                    Isa::Scalar => setup_chunk(chunk, ids, ctx, &mut out),
+                    Isa::Scalar => setup_chunk(input, ids, ctx, out),
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
-                    Isa::Avx2 => unsafe { crate::setup_simd::setup_chunk_avx2(chunk, ids, ctx, &mut out) },
+                    Isa::Avx2 => unsafe { crate::setup_simd::setup_chunk_avx2(input, ids, ctx, out) },
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
-                    Isa::Avx512 => unsafe {
-                        crate::setup_simd::setup_chunk_avx512(chunk, ids, ctx, &mut out)
-                    },
+                    Isa::Avx512 => unsafe { crate::setup_simd::setup_chunk_avx512(input, ids, ctx, out) },
                 }
-                Chunk::new(out, &grid)
-            })
-            .collect();
+                chunk.bin(&grid);
+            },
+        );
         Self { grid, chunks }
     }
 
     /// The triangles overlapping tile `t`, in input order.
-    pub fn tile(&self, t: usize) -> impl Iterator<Item = &SetupTri> {
+    pub fn tile(&self, t: usize) -> impl Iterator<Item = &'c SetupTri> + use<'c> {
         self.chunks.iter().flat_map(move |c| {
             let items = &c.items[c.start[t] as usize..c.start[t + 1] as usize];
             items.iter().map(|&i| &c.tris[i as usize])

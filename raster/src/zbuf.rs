@@ -274,6 +274,24 @@ impl<'a> ZBuffer<'a> {
         }
     }
 
+    /// [`ZBuffer::resolve`] without barycentrics: the tile's depths and ids only, emptying the
+    /// z-buffer as it goes (every entry of the tile's rows; the spare row and padding are never
+    /// changed by the kernels), so that it is [`ZBuffer::clean`] afterwards.
+    fn resolve_ids(&mut self, depth: Rows<f32>, id: Rows<u32>) {
+        let w = self.w;
+        let empty = f32::from_bits(self.empty);
+        for (r, (d_row, i_row)) in depth.into_iter().zip(id).enumerate() {
+            let (zd, zw) = (&mut self.depth[r * w..(r + 1) * w], &mut self.win[r * w..(r + 1) * w]);
+            d_row.write_copy_of_slice(zd);
+            for (o, &win) in i_row.iter_mut().zip(&*zw) {
+                o.write(if win == NONE { EMPTY_ID } else { self.tris[win as usize].id });
+            }
+            zd.fill(empty);
+            zw.fill(NONE);
+        }
+        self.clean = true;
+    }
+
     /// The ids and barycentrics of [`ZBuffer::resolve`], one pixel at a time.
     fn resolve_scalar(&self, id: Rows<u32>, bary: Rows<[f32; 2]>) {
         let [tx0, ty0, ..] = self.rect;
@@ -319,27 +337,37 @@ fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [MaybeUnini
     }
 }
 
-/// Renders the binned triangles into a new [`Target`] with the given kernel and relative depth
-/// tie window (`<= 0` or NaN: exact comparisons).
-pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, isa: Isa) -> Target {
+/// Renders the binned triangles into `target` (its buffers reused) with the given kernel and
+/// relative depth tie window (`<= 0` or NaN: exact comparisons); with `bary` false,
+/// `target.bary` is left empty and no barycentrics are computed.
+pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, bary: bool, isa: Isa, target: &mut Target) {
     let grid = binned.grid;
     let len = grid.width as usize * grid.height as usize;
     let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
+    target.width = grid.width;
+    target.height = grid.height;
+    let Target { depth, id, bary: bary_buf, .. } = target;
     // The buffers are written exactly once each, by the tile that owns the pixel, so they are
-    // not initialised first: zero-filling 16 bytes per pixel (the allocator reuses freed memory,
-    // so even zeroing is a real fill) would be a measurable part of the frame.
-    let (mut depth, mut id, mut bary) =
-        (Vec::with_capacity(len), Vec::with_capacity(len), Vec::with_capacity(len));
+    // not initialised first: a fill of 16 bytes per pixel would be a measurable part of the
+    // frame.
+    for v in [&mut *depth as &mut dyn Reserve, id, bary_buf] {
+        v.clear_and_reserve(len);
+    }
+    let bary_len = if bary { len } else { 0 };
     let depth_tiles = grid.split(&mut depth.spare_capacity_mut()[..len]);
     let id_tiles = grid.split(&mut id.spare_capacity_mut()[..len]);
-    let bary_tiles = grid.split(&mut bary.spare_capacity_mut()[..len]);
+    let bary_tiles: Vec<Option<Rows<[f32; 2]>>> = if bary {
+        grid.split(&mut bary_buf.spare_capacity_mut()[..len]).into_iter().map(Some).collect()
+    } else {
+        (0..grid.count()).map(|_| None).collect()
+    };
     depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).enumerate().for_each_init(
         ZBuffer::default,
         |zb, (t, ((depth, id), bary))| {
             if binned.tile_is_empty(t) {
                 depth.into_iter().flatten().for_each(|d| _ = d.write(empty_depth));
                 id.into_iter().flatten().for_each(|i| _ = i.write(EMPTY_ID));
-                bary.into_iter().flatten().for_each(|b| _ = b.write([0.0; 2]));
+                bary.into_iter().flatten().flatten().for_each(|b| _ = b.write([0.0; 2]));
                 return;
             }
             zb.reset(grid.rect(t), empty_depth, tie, binned.tile(t));
@@ -350,19 +378,33 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, isa: Isa) -> Tar
                 (true, false) => zb.draw_all::<true, false>(isa),
                 (true, true) => zb.draw_all::<true, true>(isa),
             }
-            zb.resolve(depth, id, bary, isa);
+            match bary {
+                Some(bary) => zb.resolve(depth, id, bary, isa),
+                None => zb.resolve_ids(depth, id),
+            }
         },
     );
-    // SAFETY: the first `len` elements of each buffer are initialised: `TileGrid::split` cuts
-    // them into the rows of the tiles, which partition the image (`tile` tests), and every tile
-    // writes every element of its rows, in the branch above or in `resolve` (whose runs cover
-    // each row).
+    // SAFETY: the first `len` (`bary_len` for `bary`) elements of each buffer are initialised:
+    // `TileGrid::split` cuts them into the rows of the tiles, which partition the image (`tile`
+    // tests), and every tile writes every element of its rows, in the branch above or in
+    // `resolve` (whose runs cover each row) or `resolve_ids`.
     unsafe {
         depth.set_len(len);
         id.set_len(len);
-        bary.set_len(len);
+        bary_buf.set_len(bary_len);
     }
-    Target { width: grid.width, height: grid.height, depth, id, bary }
+}
+
+/// `clear` then `reserve`, for the output buffers of any element type.
+trait Reserve {
+    fn clear_and_reserve(&mut self, len: usize);
+}
+
+impl<T> Reserve for Vec<T> {
+    fn clear_and_reserve(&mut self, len: usize) {
+        self.clear();
+        self.reserve(len);
+    }
 }
 
 #[cfg(test)]
@@ -413,10 +455,27 @@ mod tests {
     }
 
     fn render_with(isa: Isa, tris: &[[Vec4; 3]], ids: &[u32], reversed: bool, tie: f32, tile: u32) -> Target {
+        let mut t = Target::empty(0, 0);
+        render_into(isa, tris, ids, reversed, tie, tile, true, &mut t);
+        t
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn render_into(
+        isa: Isa,
+        tris: &[[Vec4; 3]],
+        ids: &[u32],
+        reversed: bool,
+        tie: f32,
+        tile: u32,
+        bary: bool,
+        target: &mut Target,
+    ) {
         let (width, height) = (203, 157);
         let ctx = SetupContext::new(width, height, false);
-        let binned = Binned::new(tris, Some(ids), &ctx, tile, isa);
-        render(&binned, reversed, tie, isa)
+        let mut chunks = Vec::new();
+        let binned = Binned::new(&mut chunks, tris, Some(ids), &ctx, tile, isa);
+        render(&binned, reversed, tie, bary, isa, target);
     }
 
     fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
@@ -446,10 +505,19 @@ mod tests {
                     // Not vacuous: the window changes some winners.
                     assert_eq!(tie == 0.0, reference.1 == exact.1, "tie {tie}, reversed {reversed}");
                     for &isa in &isas {
-                        let t = render_with(isa, &tris, &ids, reversed, tie, tile);
+                        let mut t = render_with(isa, &tris, &ids, reversed, tie, tile);
                         assert!(
                             bits(&t) == reference,
                             "{isa:?}, reversed {reversed}, tie {tie}, tile {tile}"
+                        );
+                        // Without barycentrics, into the buffers of another frame (the other
+                        // depth convention: every stale value differs): the same depths and ids.
+                        render_into(isa, &tris, &ids, !reversed, tie, tile, true, &mut t);
+                        render_into(isa, &tris, &ids, reversed, tie, tile, false, &mut t);
+                        let (d, i, b) = bits(&t);
+                        assert!(
+                            (&d, &i) == (&reference.0, &reference.1) && b.is_empty(),
+                            "no barycentrics: {isa:?}, reversed {reversed}, tie {tie}, tile {tile}"
                         );
                     }
                 }

@@ -12,8 +12,13 @@ use hyrt_raster::{
     rasterize,
 };
 
-const TWO_SIDED: RasterOptions =
-    RasterOptions { tile_size: 64, cull_backfaces: false, reversed_z: false, depth_tie: 0.0 };
+const TWO_SIDED: RasterOptions = RasterOptions {
+    tile_size: 64,
+    cull_backfaces: false,
+    reversed_z: false,
+    depth_tie: 0.0,
+    barycentrics: true,
+};
 
 /// Every buffer has the right size; a pixel is either empty (id EMPTY_ID, depth EMPTY_DEPTH,
 /// bary 0) or holds a known id, a depth in [0, 1] and finite barycentrics.

@@ -8,10 +8,20 @@ use common::{Camera, Rng, grid_tris, pixel_to_clip, reversed, unambiguous, uv_sp
 use glam::{DMat3, DVec3, Vec4};
 use hyrt_raster::{RasterOptions, coverage_count, for_each_fragment};
 
-const CULL: RasterOptions =
-    RasterOptions { tile_size: 64, cull_backfaces: true, reversed_z: false, depth_tie: 0.0 };
-const TWO_SIDED: RasterOptions =
-    RasterOptions { tile_size: 64, cull_backfaces: false, reversed_z: false, depth_tie: 0.0 };
+const CULL: RasterOptions = RasterOptions {
+    tile_size: 64,
+    cull_backfaces: true,
+    reversed_z: false,
+    depth_tie: 0.0,
+    barycentrics: true,
+};
+const TWO_SIDED: RasterOptions = RasterOptions {
+    tile_size: 64,
+    cull_backfaces: false,
+    reversed_z: false,
+    depth_tie: 0.0,
+    barycentrics: true,
+};
 
 /// Checks a closed sphere mesh seen from outside. Bounds:
 /// * every pixel is covered by at most 1 front-facing triangle;

@@ -13,6 +13,7 @@
 //! The reference (Whitted) renderer and, in later work, the hybrid one are two configurations
 //! of [`Options`], never two renderers. Which passes run is decided by the [`Plan`].
 
+pub mod cull;
 pub mod direct;
 pub mod specular;
 pub mod surface;
@@ -101,6 +102,11 @@ pub struct Renderer<'a> {
     pub camera: CameraRays,
     /// Rasterization near-plane distance (see `visibility::near_plane`), fixed per scene.
     pub raster_near: f32,
+    /// Bounding boxes of runs of triangles, for frustum culling before rasterization.
+    pub clusters: cull::Clusters,
+    /// Buffers of the raster visibility pass, kept between frames (see
+    /// [`visibility::RasterScratch`]).
+    raster: std::sync::Mutex<visibility::RasterScratch>,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -114,7 +120,12 @@ impl<'a> Renderer<'a> {
         let cam = scene.camera.expect("validated scene has a camera");
         let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
         let raster_near = visibility::near_plane(scene, &camera);
-        Self { scene, tracer, plan, options, camera, raster_near }
+        let clusters = match options.visibility {
+            Visibility::Raster => cull::Clusters::new(&scene.positions),
+            Visibility::Rays => cull::Clusters::default(),
+        };
+        let raster = Default::default();
+        Self { scene, tracer, plan, options, camera, raster_near, clusters, raster }
     }
 
     /// Wall time of the BVH build, in milliseconds.

@@ -1,6 +1,7 @@
-//! Time per 640x480 frame of [`rasterize`] on synthetic scenes, with the options a renderer uses
-//! (reversed-Z, two-sided, the tracer's `2^-16` depth tie window), on the global rayon pool (one
-//! thread per core):
+//! Time per 640x480 frame of [`Rasterizer::rasterize_into`] on synthetic scenes, with the options
+//! a renderer uses (reversed-Z, two-sided, the tracer's `2^-16` depth tie window, buffers kept
+//! from frame to frame), with and without barycentrics (argument `bary`), on the global rayon pool
+//! (one thread per core):
 //!
 //! * `sphere`: a 100k-triangle sphere filling the middle of the screen (setup-bound: small
 //!   triangles, a few pixels each);
@@ -14,7 +15,7 @@
 
 use divan::Bencher;
 use glam::{Mat4, Vec3, Vec4};
-use hyrt_raster::{RasterOptions, rasterize};
+use hyrt_raster::{RasterOptions, Rasterizer, Target};
 
 const WIDTH: u32 = 640;
 const HEIGHT: u32 = 480;
@@ -124,28 +125,33 @@ fn scene_offscreen() -> Vec<[Vec4; 3]> {
     transform(&view_proj, &world)
 }
 
-fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>) {
+fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>, bary: bool) {
     let ids: Vec<u32> = (0..tris.len() as u32).collect();
-    let opts = RasterOptions { reversed_z: true, depth_tie: 1.0 / 65536.0, ..Default::default() };
-    bencher.bench(|| rasterize(divan::black_box(&tris), &ids, WIDTH, HEIGHT, &opts));
+    let opts =
+        RasterOptions { reversed_z: true, depth_tie: 1.0 / 65536.0, barycentrics: bary, ..Default::default() };
+    let (mut r, mut target) = (Rasterizer::new(), Target::default());
+    bencher.bench_local(|| {
+        r.rasterize_into(divan::black_box(&tris), &ids, WIDTH, HEIGHT, &opts, &mut target);
+        divan::black_box(&target);
+    });
 }
 
-#[divan::bench]
-fn sphere_100k(bencher: Bencher) {
-    bench(bencher, scene_sphere());
+#[divan::bench(args = [false, true])]
+fn sphere_100k(bencher: Bencher, bary: bool) {
+    bench(bencher, scene_sphere(), bary);
 }
 
-#[divan::bench]
-fn quads_fill(bencher: Bencher) {
-    bench(bencher, scene_quads());
+#[divan::bench(args = [false, true])]
+fn quads_fill(bencher: Bencher, bary: bool) {
+    bench(bencher, scene_quads(), bary);
 }
 
-#[divan::bench]
-fn tiny_200k(bencher: Bencher) {
-    bench(bencher, scene_tiny());
+#[divan::bench(args = [false, true])]
+fn tiny_200k(bencher: Bencher, bary: bool) {
+    bench(bencher, scene_tiny(), bary);
 }
 
-#[divan::bench]
-fn offscreen_300k(bencher: Bencher) {
-    bench(bencher, scene_offscreen());
+#[divan::bench(args = [false, true])]
+fn offscreen_300k(bencher: Bencher, bary: bool) {
+    bench(bencher, scene_offscreen(), bary);
 }

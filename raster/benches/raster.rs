@@ -127,8 +127,12 @@ fn scene_offscreen() -> Vec<[Vec4; 3]> {
 
 fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>, bary: bool) {
     let ids: Vec<u32> = (0..tris.len() as u32).collect();
-    let opts =
-        RasterOptions { reversed_z: true, depth_tie: 1.0 / 65536.0, barycentrics: bary, ..Default::default() };
+    let opts = RasterOptions {
+        reversed_z: true,
+        depth_tie: 1.0 / 65536.0,
+        barycentrics: bary,
+        ..Default::default()
+    };
     let (mut r, mut target) = (Rasterizer::new(), Target::default());
     bencher.bench_local(|| {
         r.rasterize_into(divan::black_box(&tris), &ids, WIDTH, HEIGHT, &opts, &mut target);

@@ -28,3 +28,33 @@ pub fn cube_lookup(d: Vec3) -> (CubeFace, Vec2) {
         (f, Vec2::new(d.x, d.y) / a.z)
     }
 }
+
+impl CubeFace {
+    /// All faces in index order (the face numbers of a cube [`crate::LightMap`]).
+    pub const ALL: [CubeFace; 6] =
+        [CubeFace::PosX, CubeFace::NegX, CubeFace::PosY, CubeFace::NegY, CubeFace::PosZ, CubeFace::NegZ];
+
+    /// The face's number in a cube [`crate::LightMap`]: `PosX = 0, NegX = 1, ..., NegZ = 5`.
+    pub fn index(self) -> u8 {
+        self as u8
+    }
+
+    /// The face numbered `i`, if `i < 6`.
+    pub fn from_index(i: u8) -> Option<CubeFace> {
+        Self::ALL.get(i as usize).copied()
+    }
+
+    /// The axis the face looks along (0, 1, 2 for x, y, z), its sign (`+1` or `-1`), and the
+    /// axes of [`cube_lookup`]'s first and second coordinate on it (the other two, in order).
+    pub fn axes(self) -> (usize, f32, usize, usize) {
+        let i = self as usize;
+        let axis = i / 2;
+        let sign = if i.is_multiple_of(2) { 1.0 } else { -1.0 };
+        let (s, t) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        (axis, sign, s, t)
+    }
+}

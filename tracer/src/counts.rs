@@ -27,6 +27,9 @@ pub struct RayCounts {
     pub shadow: u64,
     pub specular: u64,
     pub vpl_shadow: u64,
+    /// Of the `shadow` rays, those answered by their occluder hint (one triangle test, no
+    /// traversal; see [`crate::Tracer::occluded_with_hint`]). The others traversed the BVH.
+    pub shadow_hint_hits: u64,
 }
 
 impl RayCounts {
@@ -43,6 +46,11 @@ impl RayCounts {
     pub fn total(&self) -> u64 {
         self.primary + self.shadow + self.specular + self.vpl_shadow
     }
+
+    /// Shadow rays that traversed the BVH (those not answered by a hint).
+    pub fn shadow_traversals(&self) -> u64 {
+        self.shadow - self.shadow_hint_hits
+    }
 }
 
 impl AddAssign for RayCounts {
@@ -51,6 +59,7 @@ impl AddAssign for RayCounts {
         self.shadow += o.shadow;
         self.specular += o.specular;
         self.vpl_shadow += o.vpl_shadow;
+        self.shadow_hint_hits += o.shadow_hint_hits;
     }
 }
 

@@ -214,6 +214,20 @@ impl Tracer {
         })
     }
 
+    /// A shadow ray that first tests the occluder hint `hint` (a triangle id from a shadow map;
+    /// any value that is not a triangle id means none): if the hint blocks the ray, the answer is
+    /// "occluded" without a traversal. Counted as one [`RayKind::Shadow`] ray, and as a
+    /// `shadow_hint_hits` when the hint answered. Same answer as [`Tracer::occluded`] (the hint
+    /// is tested with the same watertight arithmetic and bounds as the traversal).
+    pub fn occluded_with_hint(&self, ray: &Ray, hint: u32, counts: &mut RayCounts) -> bool {
+        if (hint as usize) < self.triangle_count() && self.hits_triangle(hint, ray).is_some() {
+            counts.add(RayKind::Shadow, 1);
+            counts.shadow_hint_hits += 1;
+            return true;
+        }
+        self.occluded(ray, RayKind::Shadow, counts)
+    }
+
     /// Tests a single triangle by original id (the occluder hint of a shadow map texel):
     /// no traversal. Not counted as a ray; callers count hint tests themselves.
     pub fn hits_triangle(&self, tri: u32, ray: &Ray) -> Option<Hit> {

@@ -1,0 +1,181 @@
+//! Deciding from a light's depth map whether a surface point is lit, shadowed, or undecided.
+//!
+//! # One texel: the occluder's plane, not its stored depth
+//!
+//! A texel records the triangle `T` closest to the light in the direction of the texel's centre.
+//! The classic test compares the point's distance with the distance stored for that centre; but
+//! the point's own direction differs from the centre's by up to half a texel, so on a surface
+//! seen at a grazing angle the two distances differ by `footprint * tan(theta)` and the test
+//! needs a bias that large (acne without it, light leaking under objects with it). Here the
+//! texel's triangle id is used instead: the distance `t` at which the ray from the light towards
+//! the point `p` meets `T`'s *plane* is exact for `p`'s own direction, so
+//!
+//! - `T` is `p`'s own triangle: lit (a planar triangle cannot shadow itself);
+//! - `T` is another triangle: shadowed iff `t < |p - L| - margin`;
+//! - the texel is empty: lit (nothing was drawn in that direction).
+//!
+//! A surface made of many coplanar triangles (a floor) then decides exactly at any angle, with a
+//! margin that only has to cover rounding. What it does not cover: a point near an edge between
+//! two non-coplanar triangles (a crease, a curved mesh) whose texel centre falls on the other
+//! triangle, which then decides with its plane extended past the edge. Over the lateral distance
+//! `s` (at most about one texel footprint `r * texel_angle`) a plane tilted by the dihedral angle
+//! `a` departs from the point's surface by about `s * tan(a)`: the margin is therefore
+//!
+//! `margin = bias * r * texel_angle + tol`
+//!
+//! with the knob `bias` in texel footprints (1 covers dihedral angles up to 45 degrees at the
+//! worst lateral distance) and `tol` the rounding of the point and of the plane intersection.
+//! An occluder that close to the point may also be a real one (an object resting on the
+//! surface, a contact shadow), so the decision is three-way: `t < r - margin` shadowed,
+//! `t >= r - tol` lit, in between *ambiguous*, which counts as shadowed and marks the point
+//! undecided (a ray decides). As in the reference's shadow rays, occluders within `1e-4 r` of
+//! the light do not count. Where the plane is seen edge-on (`|n . dir| < 1e-6`) its intersection
+//! is meaningless and the stored depth decides instead.
+//!
+//! # Undecided points: the map-space border test
+//!
+//! Aliasing lives where texels disagree. [`Classifier::classify`] also evaluates the decision
+//! against the 2x2 texels whose centres surround the point's projection (the bilinear
+//! footprint); when they do not all agree, the point is near a shadow border *in the map*: an
+//! occluder's silhouette, a thin occluder caught by some of the texels, a crease. This catches
+//! borders that the screen-space Laplacian misses (occluders thinner than a pixel on screen, such
+//! as blind slats seen from afar; points with no screen neighbours, such as mirror hits); a
+//! disagreement in stored depth that does not change any decision cannot change the answer and is
+//! not flagged. Footprints that leave the face (cube edges, the paraboloid rim) are undecided.
+//! An occluder thinner than a texel that no texel centre of the footprint sees is missed by both
+//! tests: that is what resolution buys.
+
+use glam::{Vec3, Vec4};
+
+use crate::border::{LIT, SHADOW};
+use crate::map::{EMPTY, LightMap};
+
+/// A texel decision between lit and shadowed (see [`Classifier::classify`]); never stored.
+const AMBIGUOUS: u8 = 3;
+
+/// Relative margin matching the tracer's shadow rays, which stop `1e-4` of the distance short
+/// of the light (`hyrt_tracer::offset::SHADOW_EPSILON`): occluders that close to the light do
+/// not count.
+pub const SHADOW_EPSILON: f32 = 1e-4;
+
+/// Rounding tolerance at the point, relative to `r + |p|`: the plane intersection and the
+/// point itself carry `f32` errors of a few ulps of those magnitudes (`1e-5` is 168 ulps of
+/// `2^-24`); an occluder within it of the point is the point's own surface.
+const TOLERANCE: f32 = 1e-5;
+
+/// The plane `n . x = d` (`n` unit) of each triangle, for [`Classifier`]: `Vec4(n, d)`. Zero for
+/// degenerate triangles (which then never occlude by plane; they are never drawn in maps either).
+pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Vec4> {
+    tris.iter()
+        .map(|t| {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+            if n == Vec3::ZERO || !t.iter().all(|v| v.is_finite()) {
+                Vec4::ZERO
+            } else {
+                // The centroid is the most accurate point of the plane (rounding averages out).
+                n.extend(n.dot((t[0] + t[1] + t[2]) / 3.0))
+            }
+        })
+        .collect()
+}
+
+/// The outcome of classifying one point against one light's map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Lookup {
+    /// The decision of the texel containing the point's projection: [`LIT`] or [`SHADOW`].
+    pub decision: u8,
+    /// The triangle of that texel when it decided [`SHADOW`], else the first triangle of the 2x2
+    /// footprint that decided [`SHADOW`], else [`EMPTY`]: the occluder to test first if a ray is
+    /// cast.
+    pub hint: u32,
+    /// Whether the 2x2 footprint disagrees (or leaves the face): a map-space border.
+    pub map_border: bool,
+    /// Face and texel of the decision (for inspection).
+    pub face: u8,
+    pub texel: [u32; 2],
+}
+
+/// Decides points against one light's map.
+#[derive(Clone, Copy, Debug)]
+pub struct Classifier<'a> {
+    pub map: &'a LightMap,
+    /// [`triangle_planes`] of the triangles the map was built from.
+    pub planes: &'a [Vec4],
+    /// Margin in texel footprints (module docs).
+    pub bias: f32,
+}
+
+impl Classifier<'_> {
+    /// Classifies point `p` of triangle `own` (module docs). `p` must differ from the light.
+    pub fn classify(&self, p: Vec3, own: u32) -> Lookup {
+        let light = self.map.light();
+        let v = p - light;
+        let r = v.length();
+        let dir = v / r;
+        let c = self.map.coord(v);
+        let res = self.map.resolution();
+        // The reference's shadow ray from `p` ignores occluders within `SHADOW_EPSILON r` of
+        // the light, and (by its origin offset) only those within rounding of `p`. Occluders
+        // between `r - margin` and `r - tol` may be a neighbouring triangle's plane extended
+        // past a crease, or a true contact shadow: undecided (module docs).
+        let near = SHADOW_EPSILON * r;
+        let tol = TOLERANCE * (r + p.abs().max_element());
+        let margin = self.bias * self.map.texel_angle(c) * r + tol;
+        let decide = |ix: u32, iy: u32| -> (u8, u32) {
+            let id = self.map.id(c.face, ix, iy);
+            if id == EMPTY || id == own {
+                return (LIT, id);
+            }
+            let pl = self.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
+            let n = pl.truncate();
+            let cos = n.dot(dir);
+            let t =
+                if cos.abs() >= 1e-6 { (pl.w - n.dot(light)) / cos } else { self.map.depth(c.face, ix, iy) };
+            let d = if !(t > near && t < r - tol) {
+                LIT
+            } else if t < r - margin {
+                SHADOW
+            } else {
+                AMBIGUOUS
+            };
+            (d, id)
+        };
+        let last = res.saturating_sub(1);
+        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
+        let (d, id) = decide(ix, iy);
+        let mut hint = if d != LIT { id } else { EMPTY };
+        // An ambiguous texel leans to shadow (an occluder is there, only closer than the bias
+        // can tell), and is a border.
+        let decision = if d == LIT { LIT } else { SHADOW };
+        let mut map_border = d == AMBIGUOUS;
+
+        // The 2x2 texels whose centres surround the projection.
+        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
+        map_border |= !(fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32);
+        if !map_border {
+            let (x0, y0) = (fx as u32, fy as u32);
+            let (mut seen, mut n) = ([EMPTY; 4], 0);
+            for (x, y) in [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)] {
+                if !self.map.texel_in_domain(c.face, x, y) {
+                    map_border = true;
+                    break;
+                }
+                // Most footprints see one or two triangles: decide each once.
+                let id = self.map.id(c.face, x, y);
+                if seen[..n].contains(&id) {
+                    continue;
+                }
+                seen[n] = id;
+                n += 1;
+                let (d, id) = decide(x, y);
+                if d != decision {
+                    map_border = true;
+                }
+                if d != LIT && hint == EMPTY {
+                    hint = id;
+                }
+            }
+        }
+        Lookup { decision, hint, map_border, face: c.face, texel: [ix, iy] }
+    }
+}

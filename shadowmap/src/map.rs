@@ -1,0 +1,745 @@
+//! Omnidirectional depth maps of a point light (or one hemisphere of a VPL): per texel, the id of
+//! the triangle closest to the light in that texel's direction and its distance.
+//!
+//! API contract (the renderer is written against it):
+//! - texel `(ix, iy)` of a face covers `[ix, ix + 1) x [iy, iy + 1)` in continuous texel
+//!   coordinates, its centre at `(ix + 0.5, iy + 0.5)`; faces are `resolution` texels square,
+//!   row-major, row 0 first;
+//! - [`LightMap::coord`] and [`LightMap::texel_dir`] are inverse to each other (up to rounding);
+//! - a face that was not asked for is not drawn: all its texels are [`EMPTY`];
+//! - building is deterministic (same bytes for any thread count).
+//!
+//! # Faces
+//!
+//! **Cube** maps have six 90-degree perspective faces numbered as [`CubeFace::index`]
+//! (`+x, -x, +y, -y, +z, -z`). A direction falls on the face of its largest `|component|` (ties
+//! to x, then y: [`cube_lookup`]), at face coordinates `(s, t)` = the other two components, in
+//! order, divided by the major one's magnitude; texel coordinates are
+//! `x = (s + 1) res / 2`, `y = (1 - t) res / 2` (the rasterizer's viewport: NDC `y = +1` is row 0).
+//! A face is drawn in clip space `(d_s, d_t, near, ±d_axis)` with `d = p - light`, so NDC is
+//! `(s, t)` and the rasterizer's reversed-Z depth is `near / w`, `w` the distance along the face
+//! axis; the texel stores the distance along its centre's direction,
+//! `near / depth * sqrt(1 + s^2 + t^2)` with `(s, t)` the centre's face coordinates.
+//! Each face draws only the triangles that can reach its frustum: a triangle with all three
+//! vertices beyond the same side plane (`d_s > w`, `d_s < -w`, `d_t > w` or `d_t < -w`) or all
+//! closer than the near plane along the axis (`w < near`: behind the light) is skipped.
+//!
+//! **Paraboloid** maps have two hemispheres back to back in the world frame: face 0 is `z >= 0`
+//! at `(u, v) = (x, y) / (|d| + z)`, face 1 is `z < 0` at `(x, y) / (|d| - z)` (as
+//! [`paraboloid_project`](crate::paraboloid_project); a direction with `z = 0` goes to face 0),
+//! and [`LightMap::build_hemisphere`] draws one hemisphere around any axis. Texel coordinates are
+//! `x = (u + 1) res / 2`, `y = (1 - v) res / 2`. Triangles are clipped to the hemisphere in 3D,
+//! tessellated and projected as derived in `tess.rs`; the texel stores `near / depth`. Only
+//! texel centres inside the unit disc belong to the map ([`LightMap::texel_in_domain`]); the
+//! others are cleared to [`EMPTY`], and [`LightMap::coord`] never returns a position in one: a
+//! direction whose texel's centre lies outside the disc (in the outermost ring, within one
+//! texel of the rim) is moved into the nearest texel whose centre is inside (by less than a
+//! texel), so that lookups near the seam find the surfaces drawn there.
+//!
+//! # Near plane and input
+//!
+//! The near distance is `2^-20` ([`NEAR_FRACTION`]) times the distance from the light to the
+//! farthest vertex of the usable triangles (1 if there are none): relative to the scene, so that
+//! geometry very close to the light is still drawn, and a power of two so the scale is exact.
+//! Surfaces closer than that to the light are clipped away.
+//!
+//! A triangle is skipped (never drawn, on no face) if a coordinate or the light is NaN or
+//! infinite, a vertex is farther than `2^100` from the light, it has zero area, or it is seen
+//! edge-on: its plane passes closer to the light than `2^-40` times the distance to its farthest
+//! vertex (the light lies on it up to `f64` rounding), or than `2^-20` times the distance to its
+//! closest point (every point of it is seen within `2^-20` radian of its plane: its image is far
+//! thinner than a texel at any resolution, and rays from the light only graze it). Ids are the indices into
+//! `tris`; triangles from index `u32::MAX` on (the empty id) are ignored. `resolution` is clamped
+//! to `[1, MAX_TARGET_DIM]` (`0` is treated as `1`). Faces missing from `faces` are not drawn.
+//!
+//! # Accuracy
+//!
+//! Ids follow the rasterizer's rules (vertices snapped to 1/256 texel, top-left fill rule, depth
+//! ties within [`DEPTH_TIE`] to the smaller id). Measured against `f64` ray casting of the texel
+//! centres (`tests/maps.rs`, random overlapping triangles; a paraboloid at resolution 256 with
+//! `tess_texels = 4`):
+//!
+//! | | ids agreeing | disagreements within | depth error (relative) |
+//! |---|---:|---:|---:|
+//! | cube | 99.99 % | 0.0006 texel of an edge | max `2.0e-7` |
+//! | paraboloid, tessellated | 99.98 % | 0.011 texel of an edge | max `7.1e-4`, median `1.2e-4` |
+//! | paraboloid, not tessellated | 94.2 % | | max `0.12` |
+//!
+//! Cube depths are the rasterizer's `near / w` (exact plane, `f32`-rounded) converted in `f32`:
+//! a few roundings. Paraboloid depths are approximate: the rasterizer interpolates `near / |d|`
+//! linearly across each projected sub-triangle, but on a plane `1 / |d| = n . dir / h` is linear
+//! in the unit direction, which is quadratic in `(u, v)`. The error grows as the square of the
+//! projected sub-triangle size and as `1 / cos` of the angle of incidence, so tessellation
+//! reduces it: on a triangle 3 units wide 0.5 from the light (resolution 64) the largest error is
+//! 2.7 (270 %) untessellated, 2.0 % at `tess_texels = 8` and 0.58 % at 4. Where the tessellation
+//! cap binds (a surface much closer to the light than its triangles are large) sub-triangles
+//! near the light stay large and so does the error there: for a light `1e-4` from a unit wall
+//! the ids are still all right but the median depth error is 48 % (cube maps: `1.4e-7`).
+//!
+use glam::{DVec3, Vec3, Vec4};
+use hyrt_raster::{EMPTY_ID, MAX_TARGET_DIM, RasterOptions, Rasterizer, Target};
+use rayon::prelude::*;
+
+use crate::cube::{CubeFace, cube_lookup};
+use crate::tess::{Frame, Params, Tessellator, dist_triangle};
+
+/// Id of a texel no triangle covers (the rasterizer's empty id).
+pub const EMPTY: u32 = hyrt_raster::EMPTY_ID;
+
+/// The near distance as a fraction of the distance to the farthest vertex (module docs).
+pub const NEAR_FRACTION: f32 = 1.0 / (1u32 << 20) as f32;
+
+/// Relative depth window within which two surfaces are a tie, won by the smaller id: the
+/// tracer's `2^-16`, so that coplanar duplicates resolve to the same triangle as in ray casting.
+pub const DEPTH_TIE: f32 = 1.0 / 65536.0;
+
+/// Largest number of subdivisions of a triangle edge in paraboloid maps (`n x n` sub-triangles;
+/// see the tessellation bound in `tess.rs`).
+pub const MAX_TESS: u32 = 64;
+
+/// Vertices farther than this from the light are skipped (keeps clip coordinates far from the
+/// `f32` range).
+const MAX_DISTANCE: f64 = 1.2676506002282294e30; // 2^100
+
+/// Clip-space triangles and their ids, for one face.
+type FaceTris = (Vec<[Vec4; 3]>, Vec<u32>);
+
+/// Input triangles per parallel job.
+const CHUNK: usize = 2048;
+
+/// The parameterisation of a point light's map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MapKind {
+    /// Six perspective faces of 90 degrees.
+    #[default]
+    Cube,
+    /// Two paraboloid hemispheres, back to back (triangles tessellated before projection).
+    Paraboloid,
+}
+
+/// How to build a map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapOptions {
+    pub kind: MapKind,
+    /// Texels per side of every face (cube face, or the square around a paraboloid's disc).
+    pub resolution: u32,
+    /// Paraboloid maps: triangles are subdivided before projection until each projected edge is
+    /// at most about this many texels long (see the tessellation docs for the exact bound);
+    /// `f32::INFINITY` turns tessellation off. Ignored by cube maps.
+    pub tess_texels: f32,
+}
+
+impl Default for MapOptions {
+    fn default() -> Self {
+        Self { kind: MapKind::Cube, resolution: 1024, tess_texels: 8.0 }
+    }
+}
+
+/// Where a direction falls in a map: the face and continuous texel coordinates on it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapCoord {
+    pub face: u8,
+    pub x: f32,
+    pub y: f32,
+}
+
+/// How the faces of a map are laid out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Layout {
+    Cube,
+    /// Two paraboloid hemispheres: [`Frame::WORLD`] and [`Frame::MIRRORED`].
+    Dual,
+    /// One paraboloid hemisphere in this frame.
+    Hemisphere(Frame),
+}
+
+impl Layout {
+    fn face_count(self) -> usize {
+        match self {
+            Layout::Cube => 6,
+            Layout::Dual => 2,
+            Layout::Hemisphere(_) => 1,
+        }
+    }
+
+    /// The paraboloid frame of face `face` (clamped to the last face).
+    fn frame(self, face: u8) -> Frame {
+        match self {
+            Layout::Hemisphere(f) => f,
+            _ if face == 0 => Frame::WORLD,
+            _ => Frame::MIRRORED,
+        }
+    }
+}
+
+/// One face's texels (empty when not drawn).
+#[derive(Clone, Debug, Default)]
+struct Face {
+    id: Vec<u32>,
+    dist: Vec<f32>,
+}
+
+/// A light's depth map: 6 cube faces or 2 paraboloid hemispheres (or 1 hemisphere, for VPLs).
+#[derive(Clone, Debug)]
+pub struct LightMap {
+    layout: Layout,
+    resolution: u32,
+    light: Vec3,
+    near: f32,
+    drawn: Vec<bool>,
+    faces: Vec<Face>,
+    triangles_drawn: u64,
+}
+
+impl LightMap {
+    /// Number of faces of a point-light map of this kind (6 or 2).
+    pub fn face_count(kind: MapKind) -> usize {
+        match kind {
+            MapKind::Cube => 6,
+            MapKind::Paraboloid => 2,
+        }
+    }
+
+    /// The face of a point-light map of kind `kind` that direction `dir` (non-zero) falls on,
+    /// the same as `coord(dir).face` of a built map, without building one (to decide which
+    /// faces to draw).
+    pub fn face_of(kind: MapKind, dir: Vec3) -> u8 {
+        match kind {
+            MapKind::Cube => cube_lookup(dir).0.index(),
+            // `-0.0 >= 0.0`: the seam and its signed zero go to the front; NaN to the back.
+            MapKind::Paraboloid => {
+                if dir.z >= 0.0 {
+                    0
+                } else {
+                    1
+                }
+            }
+        }
+    }
+
+    /// Draws the map of the point light at `light` over the triangles `tris` (triangle `i` has
+    /// id `i`), drawing only the faces `i` with `faces[i]` (`faces.len() == face_count`).
+    /// Degenerate, NaN or infinite triangles are skipped.
+    pub fn build(tris: &[[Vec3; 3]], light: Vec3, opts: &MapOptions, faces: &[bool]) -> Self {
+        let layout = match opts.kind {
+            MapKind::Cube => Layout::Cube,
+            MapKind::Paraboloid => Layout::Dual,
+        };
+        Self::build_layout(tris, light, opts, layout, faces)
+    }
+
+    /// One paraboloid hemisphere centred on unit `axis`, seen from `origin` (a VPL's map):
+    /// one face. `opts.kind` is ignored.
+    ///
+    /// The map frame is `(t, b, axis)` with `t, b` from Duff et al.'s orthonormal basis (the
+    /// world axes for `axis = +z`); `axis` is normalised, and a zero or non-finite one means
+    /// `+z`. [`LightMap::coord`] puts directions behind the hemisphere on its rim.
+    pub fn build_hemisphere(tris: &[[Vec3; 3]], origin: Vec3, axis: Vec3, opts: &MapOptions) -> Self {
+        let frame = Frame::around(axis.as_dvec3());
+        Self::build_layout(tris, origin, opts, Layout::Hemisphere(frame), &[true])
+    }
+
+    fn build_layout(
+        tris: &[[Vec3; 3]],
+        light: Vec3,
+        opts: &MapOptions,
+        layout: Layout,
+        faces: &[bool],
+    ) -> Self {
+        let resolution = opts.resolution.clamp(1, MAX_TARGET_DIM);
+        let count = layout.face_count();
+        let drawn: Vec<bool> = (0..count).map(|i| faces.get(i).copied().unwrap_or(false)).collect();
+        let (valid, near) =
+            if drawn.iter().any(|&d| d) { usable_triangles(tris, light) } else { (Vec::new(), 1.0) };
+        let mut map = LightMap {
+            layout,
+            resolution,
+            light,
+            near,
+            drawn,
+            faces: Vec::with_capacity(count),
+            triangles_drawn: 0,
+        };
+
+        let ropts = RasterOptions {
+            reversed_z: true,
+            barycentrics: false,
+            cull_backfaces: false,
+            depth_tie: DEPTH_TIE,
+            ..RasterOptions::default()
+        };
+        let mut rasterizer = Rasterizer::new();
+        let mut target = Target::default();
+        let mut cube = if layout == Layout::Cube {
+            cube_triangles(tris, &valid, light, near, &map.drawn)
+        } else {
+            vec![]
+        }
+        .into_iter();
+        for f in 0..count {
+            let cube_face = cube.next();
+            if !map.drawn[f] {
+                map.faces.push(Face::default());
+                continue;
+            }
+            let (clip, ids) = match layout {
+                Layout::Cube => cube_face.unwrap_or_default(),
+                Layout::Dual | Layout::Hemisphere(_) => {
+                    let prm = Params::new(f64::from(near), resolution, opts.tess_texels);
+                    hemisphere_triangles(tris, &valid, light, layout.frame(f as u8), &prm)
+                }
+            };
+            map.triangles_drawn += clip.len() as u64;
+            rasterizer.rasterize_into(&clip, &ids, resolution, resolution, &ropts, &mut target);
+            let mut face =
+                Face { id: std::mem::take(&mut target.id), dist: std::mem::take(&mut target.depth) };
+            map.finish_face(&mut face);
+            map.faces.push(face);
+        }
+        map
+    }
+
+    /// Turns the rasterizer's reversed-Z depths into distances, and clears the texels outside a
+    /// paraboloid's disc.
+    ///
+    /// In `f32` (so that it vectorises): `near / depth` and the square root are correctly
+    /// rounded, a few ulps in all (`~3e-7` relative) on top of the depth's own rounding.
+    fn finish_face(&self, face: &mut Face) {
+        let res = self.resolution as usize;
+        let near = self.near;
+        let inv = 2.0 / self.resolution as f32;
+        // Squared face coordinate of texel centre i (the same for rows: t = -s).
+        let sq: Vec<f32> = (0..res).map(|i| ((i as f32 + 0.5) * inv - 1.0).powi(2)).collect();
+        let cube = self.layout == Layout::Cube;
+        let res32 = self.resolution;
+        face.dist.par_chunks_mut(res).zip(face.id.par_chunks_mut(res)).enumerate().for_each(
+            |(y, (dist, id))| {
+                if cube {
+                    // w = near / depth along the axis; the centre's direction (1, s, t) is
+                    // sqrt(1 + s^2 + t^2) times longer than its axis component. Reversed-Z:
+                    // empty texels hold depth 0, drawn ones near / w >= 2^-21.
+                    let row = 1.0 + sq[y];
+                    for (d, s2) in dist.iter_mut().zip(&sq) {
+                        let r = near / *d * (row + s2).sqrt();
+                        *d = if *d > 0.0 { r } else { f32::INFINITY };
+                    }
+                } else {
+                    let (x0, x1) = disc_span(res32, y as u32);
+                    for (x, (d, i)) in dist.iter_mut().zip(id.iter_mut()).enumerate() {
+                        let inside = (x0..x1).contains(&(x as u32)) && *d > 0.0;
+                        *d = if inside { near / *d } else { f32::INFINITY };
+                        *i = if inside { *i } else { EMPTY };
+                    }
+                }
+            },
+        );
+    }
+
+    /// Where direction `dir` (non-zero, from the light) falls.
+    ///
+    /// Coordinates are clamped into `[0, resolution)` (a direction on a cube edge or corner goes
+    /// to the face [`cube_lookup`] picks, at its last texel), and for paraboloids into a texel
+    /// whose centre is in the disc (module docs). NaN gives some in-range texel.
+    pub fn coord(&self, dir: Vec3) -> MapCoord {
+        let d = dir.as_dvec3();
+        let half = f64::from(self.resolution) * 0.5;
+        let (face, s, t) = match self.layout {
+            Layout::Cube => {
+                let (face, st) = cube_lookup(dir);
+                (face.index(), f64::from(st.x), f64::from(st.y))
+            }
+            Layout::Dual | Layout::Hemisphere(_) => {
+                let face = match self.layout {
+                    Layout::Dual => Self::face_of(MapKind::Paraboloid, dir),
+                    _ => 0,
+                };
+                let m = self.layout.frame(face).to_map(d);
+                // Directions behind a single hemisphere go to its rim.
+                let z = m.z.max(0.0);
+                let w = (m.x * m.x + m.y * m.y + z * z).sqrt() + z;
+                (face, m.x / w, m.y / w)
+            }
+        };
+        let (x, y) = self.clamp_to_domain((s + 1.0) * half, (1.0 - t) * half);
+        MapCoord { face, x, y }
+    }
+
+    /// Continuous coordinates clamped into `[0, resolution)` and, for paraboloids, into a texel
+    /// of the domain: the nearest one (by distance to its square) if the point's own is not.
+    fn clamp_to_domain(&self, x: f64, y: f64) -> (f32, f32) {
+        let res = self.resolution;
+        let lim = (res as f32).next_down();
+        // `max` before `min` and NaN -> 0: f32::max returns the non-NaN operand.
+        let (x, y) = ((x as f32).max(0.0).min(lim), (y as f32).max(0.0).min(lim));
+        if self.layout == Layout::Cube {
+            return (x, y);
+        }
+        let (ix, iy) = (x as u32, y as u32);
+        if disc_contains(res, ix, iy) {
+            return (x, y);
+        }
+        let (jx, jy) = nearest_in_disc(res, x, y).unwrap_or((res / 2, res / 2));
+        let into = |v: f32, j: u32| v.max(j as f32).min(((j + 1) as f32).next_down());
+        (into(x, jx), into(y, jy))
+    }
+
+    /// The unit direction (from the light) of the continuous texel position `(x, y)` on `face`.
+    ///
+    /// A face number out of range is taken as the last face.
+    pub fn texel_dir(&self, face: u8, x: f32, y: f32) -> Vec3 {
+        let inv = 2.0 / f64::from(self.resolution);
+        let (s, t) = (f64::from(x) * inv - 1.0, 1.0 - f64::from(y) * inv);
+        let d = match self.layout {
+            Layout::Cube => {
+                let (axis, sign, si, ti) = CubeFace::ALL[usize::from(face.min(5))].axes();
+                let mut d = DVec3::ZERO;
+                d[axis] = f64::from(sign);
+                d[si] = s;
+                d[ti] = t;
+                d
+            }
+            Layout::Dual | Layout::Hemisphere(_) => {
+                // Inverse of (u, v) = (x, y) / (1 + z) on the unit sphere (crate::paraboloid).
+                let r2 = s * s + t * t;
+                let z = (1.0 - r2) / (1.0 + r2);
+                self.layout.frame(face).to_world(DVec3::new(s * (1.0 + z), t * (1.0 + z), z))
+            }
+        };
+        d.normalize().as_vec3()
+    }
+
+    /// The face index if valid, texel index within it.
+    fn texel(&self, face: u8, ix: u32, iy: u32) -> Option<(&Face, usize)> {
+        let res = self.resolution;
+        let f = self.faces.get(usize::from(face))?;
+        (ix < res && iy < res && !f.id.is_empty()).then(|| (f, iy as usize * res as usize + ix as usize))
+    }
+
+    /// Id of the closest triangle at texel `(ix, iy)` of `face`, or [`EMPTY`].
+    pub fn id(&self, face: u8, ix: u32, iy: u32) -> u32 {
+        self.texel(face, ix, iy).map_or(EMPTY, |(f, i)| f.id[i])
+    }
+
+    /// Distance from the light to the stored surface in the direction of the texel's centre
+    /// (`f32::INFINITY` when empty).
+    pub fn depth(&self, face: u8, ix: u32, iy: u32) -> f32 {
+        self.texel(face, ix, iy).map_or(f32::INFINITY, |(f, i)| f.dist[i])
+    }
+
+    /// Angle in radians subtended by one texel at `c` (the largest of its two sides): the
+    /// footprint of a texel at distance `r` is about `r * texel_angle`.
+    ///
+    /// A texel is `2 / res` wide in face coordinates `(s, t)`. Cube: the unit direction of
+    /// `(1, s, t)` moves by `sqrt(1 + t^2) / (1 + s^2 + t^2)` per unit of `s` (and symmetrically),
+    /// from `2 / res` at the face centre down to `0.94 / res` at a corner. Paraboloid: the map is
+    /// conformal with `dtheta = 2 / (1 + u^2 + v^2) du`, from `4 / res` at the centre to `2 / res`
+    /// at the rim.
+    pub fn texel_angle(&self, c: MapCoord) -> f32 {
+        let inv = 2.0 / f64::from(self.resolution);
+        let (s, t) = (f64::from(c.x) * inv - 1.0, 1.0 - f64::from(c.y) * inv);
+        let (s2, t2) = (s * s, t * t);
+        let per_unit = match self.layout {
+            Layout::Cube => (1.0 + s2.max(t2)).sqrt() / (1.0 + s2 + t2),
+            _ => 2.0 / (1.0 + s2 + t2),
+        };
+        (per_unit * inv) as f32
+    }
+
+    /// Whether a texel centre lies in the region the face covers (always for cube faces; inside
+    /// the unit disc for paraboloids; texels outside it are never drawn).
+    pub fn texel_in_domain(&self, face: u8, ix: u32, iy: u32) -> bool {
+        let res = self.resolution;
+        usize::from(face) < self.faces.len()
+            && ix < res
+            && iy < res
+            && (self.layout == Layout::Cube || disc_contains(res, ix, iy))
+    }
+
+    pub fn kind(&self) -> MapKind {
+        match self.layout {
+            Layout::Cube => MapKind::Cube,
+            Layout::Dual | Layout::Hemisphere(_) => MapKind::Paraboloid,
+        }
+    }
+
+    /// Texels per side of every face (the requested resolution clamped to `[1, MAX_TARGET_DIM]`).
+    pub fn resolution(&self) -> u32 {
+        self.resolution
+    }
+
+    pub fn light(&self) -> Vec3 {
+        self.light
+    }
+
+    /// The near distance the map was drawn with (module docs): surfaces closer to the light are
+    /// not in the map.
+    pub fn near(&self) -> f32 {
+        self.near
+    }
+
+    /// Number of faces of this map (6, 2, or 1 for [`LightMap::build_hemisphere`]).
+    pub fn faces(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Which faces were drawn.
+    pub fn faces_drawn(&self) -> &[bool] {
+        &self.drawn
+    }
+
+    /// Triangles rasterized, after culling per face and tessellation (summed over faces).
+    pub fn triangles_drawn(&self) -> u64 {
+        self.triangles_drawn
+    }
+
+    /// Bytes of texel memory.
+    pub fn memory_bytes(&self) -> usize {
+        self.faces.iter().map(|f| f.id.len() * 4 + f.dist.len() * 4).sum()
+    }
+}
+
+/// Whether texel `(x, y)`'s centre is strictly inside the disc inscribed in a `res`-texel square:
+/// `|centre - res/2| < res/2`, times 2 in integers: `(2x + 1 - res)^2 + (2y + 1 - res)^2 < res^2`.
+/// (A sum of two odd squares is 2 mod 8 and `res^2` is 0, 1 or 4 mod 8: no centre lies exactly
+/// on the circle.)
+pub(crate) fn disc_contains(res: u32, x: u32, y: u32) -> bool {
+    let r = i64::from(res);
+    let (cx, cy) = (2 * i64::from(x) + 1 - r, 2 * i64::from(y) + 1 - r);
+    cx * cx + cy * cy < r * r
+}
+
+/// The columns `[x0, x1)` of row `y` whose texel centres are in the disc ([`disc_contains`]).
+fn disc_span(res: u32, y: u32) -> (u32, u32) {
+    let r = i64::from(res);
+    let cy = 2 * i64::from(y) + 1 - r;
+    let room = r * r - cy * cy; // (2x + 1 - res)^2 < room
+    if room <= 0 {
+        return (0, 0);
+    }
+    // Largest odd-or-even c = |2x + 1 - res| with c^2 < room, from the integer square root.
+    let mut c = (room as f64).sqrt() as i64;
+    while c * c >= room {
+        c -= 1;
+    }
+    while (c + 1) * (c + 1) < room {
+        c += 1;
+    }
+    // 2x + 1 - res in [-c, c]  <=>  x in [(res - 1 - c) / 2, (res - 1 + c) / 2].
+    let lo = (r - 1 - c + 1).div_euclid(2).max(0); // ceil((res - 1 - c) / 2)
+    let hi = (r - 1 + c).div_euclid(2).min(r - 1); // floor((res - 1 + c) / 2)
+    if lo > hi { (0, 0) } else { (lo as u32, hi as u32 + 1) }
+}
+
+/// The texel of the disc nearest to point `(x, y)` (distance to its square) among the 3x3 around
+/// the point's texel, the first in row-major order on ties.
+fn nearest_in_disc(res: u32, x: f32, y: f32) -> Option<(u32, u32)> {
+    let (ix, iy) = (x as u32, y as u32);
+    let mut best: Option<(f32, u32, u32)> = None;
+    for jy in iy.saturating_sub(1)..=(iy + 1).min(res - 1) {
+        for jx in ix.saturating_sub(1)..=(ix + 1).min(res - 1) {
+            if !disc_contains(res, jx, jy) {
+                continue;
+            }
+            let gap = |v: f32, j: u32| (j as f32 - v).max(v - (j + 1) as f32).max(0.0);
+            let d2 = gap(x, jx).powi(2) + gap(y, jy).powi(2);
+            if best.is_none_or(|(b, _, _)| d2 < b) {
+                best = Some((d2, jx, jy));
+            }
+        }
+    }
+    best.map(|(_, jx, jy)| (jx, jy))
+}
+
+/// The indices of the triangles that can be drawn (module docs) and the near distance.
+fn usable_triangles(tris: &[[Vec3; 3]], light: Vec3) -> (Vec<u32>, f32) {
+    let tris = &tris[..tris.len().min(EMPTY_ID as usize)];
+    let l = light.as_dvec3();
+    let parts: Vec<(Vec<u32>, f64)> = tris
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let mut ids = Vec::with_capacity(chunk.len());
+            let mut far = 0.0f64;
+            for (k, t) in chunk.iter().enumerate() {
+                if let Some(r) = usable(t, l) {
+                    ids.push((c * CHUNK + k) as u32);
+                    far = far.max(r);
+                }
+            }
+            (ids, far)
+        })
+        .collect();
+    let far = parts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let ids = parts.into_iter().flat_map(|p| p.0).collect();
+    // Exact: far * 2^-20 rounded once to f32; at least the smallest normal f32.
+    let near = if far > 0.0 { ((far * f64::from(NEAR_FRACTION)) as f32).max(f32::MIN_POSITIVE) } else { 1.0 };
+    (ids, near)
+}
+
+/// The distance from the light to the triangle's farthest vertex, if it can be drawn.
+fn usable(t: &[Vec3; 3], l: DVec3) -> Option<f64> {
+    if !l.is_finite() || !t.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    // f32 - f32 in f64 is exact unless the exponents differ by more than 29.
+    let d = t.map(|v| v.as_dvec3() - l);
+    let far = d.iter().map(|x| x.length()).fold(0.0, f64::max);
+    if far.is_nan() || far > MAX_DISTANCE {
+        return None;
+    }
+    let n = (d[1] - d[0]).cross(d[2] - d[0]);
+    let len = n.length();
+    if len.is_nan() || len <= 0.0 {
+        return None; // zero area
+    }
+    // Distance from the light to the triangle's plane, against the edge-on thresholds.
+    let h = n.dot(d[0]).abs() / len;
+    let edge_on_abs = far * 2f64.powi(-40);
+    let edge_on_rel = dist_triangle(d[0], d[1], d[2]) * 2f64.powi(-20);
+    (h > edge_on_abs && h > edge_on_rel).then_some(far)
+}
+
+/// Clip-space triangles and ids of each drawn cube face (module docs), in input order: one pass
+/// over the triangles for all faces.
+fn cube_triangles(
+    tris: &[[Vec3; 3]],
+    valid: &[u32],
+    light: Vec3,
+    near: f32,
+    drawn: &[bool],
+) -> Vec<FaceTris> {
+    let faces: Vec<(usize, (usize, f32, usize, usize))> = CubeFace::ALL
+        .iter()
+        .enumerate()
+        .filter(|(f, _)| drawn[*f])
+        .map(|(f, face)| (f, face.axes()))
+        .collect();
+    let parts: Vec<Vec<FaceTris>> = valid
+        .par_chunks(CHUNK)
+        .map(|chunk| {
+            let mut out = vec![FaceTris::default(); 6];
+            for &id in chunk {
+                let d = tris[id as usize].map(|p| p - light);
+                for &(f, (axis, sign, s, t)) in &faces {
+                    let v = d.map(|d| Vec4::new(d[s], d[t], near, sign * d[axis]));
+                    let all = |f: &dyn Fn(&Vec4) -> bool| v.iter().all(f);
+                    if all(&|c| c.w < near)
+                        || all(&|c| c.x > c.w)
+                        || all(&|c| c.x < -c.w)
+                        || all(&|c| c.y > c.w)
+                        || all(&|c| c.y < -c.w)
+                    {
+                        continue;
+                    }
+                    out[f].0.push(v);
+                    out[f].1.push(id);
+                }
+            }
+            out
+        })
+        .collect();
+    (0..6)
+        .map(|f| {
+            let mut face = FaceTris::default();
+            face.0.reserve(parts.iter().map(|p| p[f].0.len()).sum());
+            face.1.reserve(face.0.capacity());
+            for p in &parts {
+                face.0.extend_from_slice(&p[f].0);
+                face.1.extend_from_slice(&p[f].1);
+            }
+            face
+        })
+        .collect()
+}
+
+/// Clip-space triangles of one paraboloid hemisphere (clipped and tessellated), in input order.
+fn hemisphere_triangles(
+    tris: &[[Vec3; 3]],
+    valid: &[u32],
+    light: Vec3,
+    frame: Frame,
+    prm: &Params,
+) -> FaceTris {
+    let l = light.as_dvec3();
+    let parts: Vec<Tessellator> = valid
+        .par_chunks(CHUNK / 4)
+        .map(|chunk| {
+            let mut tess = Tessellator::default();
+            for &id in chunk {
+                tess.triangle(tris[id as usize].map(|p| frame.to_map(p.as_dvec3() - l)), id, prm);
+            }
+            tess
+        })
+        .collect();
+    let mut face = FaceTris::default();
+    face.0.reserve(parts.iter().map(|t| t.tris.len()).sum());
+    face.1.reserve(face.0.capacity());
+    for t in parts {
+        face.0.extend_from_slice(&t.tris);
+        face.1.extend_from_slice(&t.ids);
+    }
+    face
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disc_domain_and_nearest_texel() {
+        // Every point of the closed disc (and a little beyond) finds a texel of the domain in
+        // its 3x3 neighbourhood, less than a texel away.
+        let mut worst = 0.0f32;
+        for res in 1..=160u32 {
+            let r = res as f32 * 0.5;
+            for k in 0..2000 {
+                let a = k as f32 * 0.0031416;
+                for rho in [r, r * (1.0 + 1e-6), r - 0.3, r - 0.7] {
+                    let (x, y) = (r + rho * a.cos(), r + rho * a.sin());
+                    let lim = (res as f32).next_down();
+                    let (x, y) = (x.max(0.0).min(lim), y.max(0.0).min(lim));
+                    if disc_contains(res, x as u32, y as u32) {
+                        continue;
+                    }
+                    let (jx, jy) =
+                        nearest_in_disc(res, x, y).unwrap_or_else(|| panic!("res {res} at ({x}, {y})"));
+                    let gap = |v: f32, j: u32| (j as f32 - v).max(v - (j + 1) as f32).max(0.0);
+                    worst = worst.max(gap(x, jx).hypot(gap(y, jy)));
+                }
+            }
+        }
+        assert!(worst < 1.0, "moved by {worst} texels");
+        // The centre texel is always in the disc, and the row spans are the disc's rows.
+        for res in 1..=200 {
+            assert!(disc_contains(res, res / 2, res / 2));
+            for y in 0..res {
+                let (x0, x1) = disc_span(res, y);
+                for x in 0..res {
+                    assert_eq!((x0..x1).contains(&x), disc_contains(res, x, y), "res {res} ({x}, {y})");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn edge_on_and_degenerate_triangles_are_unusable() {
+        let l = DVec3::ZERO;
+        let ok = [Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(0.0, 1.0, 1.0)];
+        assert!(usable(&ok, l).is_some());
+        // The light in the triangle's plane (inside it, and outside it).
+        assert!(
+            usable(&[Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)], l)
+                .is_none()
+        );
+        assert!(
+            usable(&[Vec3::new(1.0, 1.0, 0.0), Vec3::new(2.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 0.0)], l)
+                .is_none()
+        );
+        // Just above the plane inside the triangle: a huge image, drawn.
+        let above = ok.map(|v| v - Vec3::new(0.0, 0.0, 1.0 - 1e-4));
+        assert!(usable(&above, l).is_some());
+        assert!(usable(&[ok[0], ok[0], ok[1]], l).is_none());
+        assert!(usable(&[ok[0], ok[1], Vec3::new(f32::NAN, 0.0, 1.0)], l).is_none());
+        assert!(usable(&ok, DVec3::new(f64::INFINITY, 0.0, 0.0)).is_none());
+    }
+}

@@ -7,11 +7,12 @@ use std::{
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
+use hyrt_shadowmap::MapKind;
 
 use crate::{
     film::atomic_write,
     metrics,
-    render::{Options, Renderer, Visibility},
+    render::{Borders, MirrorShadows, Options, Renderer, Shadows, Visibility},
     scene,
     stats::RenderStats,
 };
@@ -59,29 +60,174 @@ pub struct RenderArgs {
     /// Exposure (linear scale) for the PNG, overriding the scene's.
     #[arg(long, value_name = "E")]
     pub exposure: Option<f32>,
-    /// Primary visibility: `rays` (one primary ray per pixel, the reference) or `raster`
-    /// (z-buffer; no primary rays).
-    #[arg(long, value_enum, default_value_t = VisibilityArg::Rays)]
-    pub visibility: VisibilityArg,
+    #[command(flatten)]
+    pub knobs: Knobs,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
 }
 
-/// `--visibility` values.
+/// The strategy of each stage and the knobs of every approximation. A preset sets all of them;
+/// each explicit flag then overrides its own.
+#[derive(Args, Debug, Clone, Default)]
+pub struct Knobs {
+    /// `reference`: rays everywhere (the default); `hybrid`: raster visibility + SMeRTS with the
+    /// default knobs.
+    #[arg(long, value_enum)]
+    pub preset: Option<PresetArg>,
+    /// Primary visibility: `rays` (one primary ray per pixel) or `raster` (z-buffer; no primary
+    /// rays).
+    #[arg(long, value_enum)]
+    pub visibility: Option<VisibilityArg>,
+    /// Point-light shadows: `rays` (one shadow ray per hit and light), `maps` (depth maps
+    /// only) or `smerts` (maps + shadow rays on the borders).
+    #[arg(long, value_enum)]
+    pub shadows: Option<ShadowsArg>,
+    /// Light map parameterisation.
+    #[arg(long, value_enum, value_name = "KIND")]
+    pub shadow_map: Option<MapKindArg>,
+    /// Light map resolution: texels per side of each face.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub shadow_map_res: Option<u32>,
+    /// Depth margin of map decisions, in texel footprints.
+    #[arg(long, value_name = "B")]
+    pub bias: Option<f32>,
+    /// SMeRTS border detection: screen-space Laplacian, map-space texel disagreement, or both.
+    #[arg(long, value_enum)]
+    pub borders: Option<BordersArg>,
+    /// SMeRTS border dilation radius, in pixels.
+    #[arg(long, value_name = "R")]
+    pub dilate: Option<u32>,
+    /// Paraboloid maps: tessellate triangles until projected edges are at most T texels
+    /// (`inf`: no tessellation).
+    #[arg(long, value_name = "T")]
+    pub tess: Option<f32>,
+    /// Shadows at mirror hits: from the `maps` (map-space border test) or by `rays`.
+    #[arg(long, value_enum)]
+    pub mirror_shadows: Option<MirrorArg>,
+    /// Also cast a shadow ray for every map decision and count those it contradicts
+    /// (wrong-visibility pixels, in the stats; these rays are not counted as frame rays).
+    #[arg(long)]
+    pub check_visibility: bool,
+}
+
+impl Knobs {
+    /// The options these flags select.
+    pub fn options(&self) -> Result<Options> {
+        let mut o = match self.preset.unwrap_or(PresetArg::Reference) {
+            PresetArg::Reference => Options::reference(),
+            PresetArg::Hybrid => Options::hybrid(),
+        };
+        if let Some(v) = self.visibility {
+            o.visibility = match v {
+                VisibilityArg::Rays => Visibility::Rays,
+                VisibilityArg::Raster => Visibility::Raster,
+            };
+        }
+        if let Some(s) = self.shadows {
+            o.shadows = match s {
+                ShadowsArg::Rays => Shadows::Rays,
+                ShadowsArg::Maps => Shadows::Maps,
+                ShadowsArg::Smerts => Shadows::Smerts,
+            };
+        }
+        let sh = &mut o.shadow;
+        if let Some(k) = self.shadow_map {
+            sh.map.kind = match k {
+                MapKindArg::Cube => MapKind::Cube,
+                MapKindArg::Paraboloid => MapKind::Paraboloid,
+            };
+        }
+        if let Some(n) = self.shadow_map_res {
+            sh.map.resolution = n;
+        }
+        if let Some(b) = self.bias {
+            if !(b >= 0.0 && b.is_finite()) {
+                bail!("--bias must be a finite number >= 0, got {b}");
+            }
+            sh.bias = b;
+        }
+        if let Some(b) = self.borders {
+            sh.borders = match b {
+                BordersArg::Laplacian => Borders::Laplacian,
+                BordersArg::Depth => Borders::Depth,
+                BordersArg::Both => Borders::Both,
+            };
+        }
+        if let Some(r) = self.dilate {
+            sh.dilate = r;
+        }
+        if let Some(t) = self.tess {
+            if t.is_nan() || t <= 0.0 {
+                bail!("--tess must be > 0 (or inf), got {t}");
+            }
+            sh.map.tess_texels = t;
+        }
+        if let Some(m) = self.mirror_shadows {
+            sh.mirror = match m {
+                MirrorArg::Maps => MirrorShadows::Maps,
+                MirrorArg::Rays => MirrorShadows::Rays,
+            };
+        }
+        o.check_visibility = self.check_visibility;
+        Ok(o)
+    }
+}
+
+/// The options as JSON, for the stats.
+pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
+    let sh = &o.shadow;
+    serde_json::json!({
+        "visibility": o.visibility.name(),
+        "shadows": o.shadows.name(),
+        "shadow_map": match sh.map.kind { MapKind::Cube => "cube", MapKind::Paraboloid => "paraboloid" },
+        "shadow_map_res": sh.map.resolution,
+        "bias": sh.bias,
+        "borders": sh.borders.name(),
+        "dilate": sh.dilate,
+        "tess": if sh.map.tess_texels.is_finite() { serde_json::json!(sh.map.tess_texels) } else { serde_json::json!("inf") },
+        "mirror_shadows": match sh.mirror { MirrorShadows::Maps => "maps", MirrorShadows::Rays => "rays" },
+        "indirect": "none",
+        "max_depth": max_depth,
+    })
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PresetArg {
+    Reference,
+    Hybrid,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum VisibilityArg {
     Rays,
     Raster,
 }
 
-impl From<VisibilityArg> for Visibility {
-    fn from(v: VisibilityArg) -> Self {
-        match v {
-            VisibilityArg::Rays => Visibility::Rays,
-            VisibilityArg::Raster => Visibility::Raster,
-        }
-    }
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ShadowsArg {
+    Rays,
+    Maps,
+    Smerts,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MapKindArg {
+    Cube,
+    Paraboloid,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BordersArg {
+    Laplacian,
+    Depth,
+    Both,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MirrorArg {
+    Maps,
+    Rays,
 }
 
 #[derive(Args, Debug)]
@@ -145,7 +291,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         check_writable(p)?;
     }
 
-    let options = Options { visibility: a.visibility.into(), ..Options::default() };
+    let options = a.knobs.options()?;
     let renderer = Renderer::new(&scene, options);
     say(format!(
         "{}: {} triangles, {} lights, {}x{}, {} threads; BVH {:.1} ms\nplan:\n{}",
@@ -177,13 +323,21 @@ fn render(a: &RenderArgs) -> Result<()> {
     let r = &frame.stats.rays;
     let times: Vec<String> = frame.stats.time_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
     say(format!(
-        "rays: primary {} shadow {} specular {} total {}\ntime ms: {}",
+        "rays: primary {} shadow {} (hint hits {}) specular {} total {}\ntime ms: {}",
         r.primary,
         r.shadow,
+        r.shadow_hint_hits,
         r.specular,
         r.total(),
         times.join(", ")
     ));
+    for (l, s) in frame.stats.lights.iter().enumerate() {
+        let wrong = s.wrong.map_or(String::new(), |w| format!(", {w} wrong"));
+        say(format!(
+            "light {l}: {} lit, {} shadowed, {} undecided (rays){wrong}; {} map face(s)",
+            s.lit, s.shadowed, s.undecided, s.faces_drawn
+        ));
+    }
 
     if let Some(p) = &png {
         frame.film.write_png(p, scene.settings.exposure)?;
@@ -194,12 +348,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         say(format!("wrote {}", p.display()));
     }
     if let Some(p) = &a.stats {
-        let opts = serde_json::json!({
-            "visibility": options.visibility.name(),
-            "shadows": options.shadows.name(),
-            "indirect": "none",
-            "max_depth": scene.settings.max_depth,
-        });
+        let opts = options_json(&options, scene.settings.max_depth);
         let stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, renderer.bvh_build_ms());
         let json = serde_json::to_string_pretty(&stats)?;
         atomic_write(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?;

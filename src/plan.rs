@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 use crate::{
-    render::{Options, Visibility},
+    render::{Options, Shadows, Visibility},
     scene::Scene,
 };
 
@@ -44,14 +44,52 @@ impl Plan {
         if lights == 0 {
             plan.add(false, "direct", "the scene has no point lights".into());
         } else {
-            plan.add(
-                true,
-                "direct",
-                format!(
-                    "{lights} point light(s), {}: one shadow ray per lit hit and light",
-                    opts.shadows.name()
-                ),
+            let sh = &opts.shadow;
+            let kind = match sh.map.kind {
+                hyrt_shadowmap::MapKind::Cube => "cube",
+                hyrt_shadowmap::MapKind::Paraboloid => "dual-paraboloid",
+            };
+            let maps = format!(
+                "{kind} maps of {n}x{n} per face, only faces that camera hits fall on, built once and cached",
+                n = sh.map.resolution
             );
+            match opts.shadows {
+                Shadows::Rays => {
+                    plan.add(false, "map_build", "shadows by rays: no light maps".into());
+                    plan.add(
+                        true,
+                        "direct",
+                        format!("{lights} point light(s), rays: one shadow ray per lit hit and light"),
+                    );
+                }
+                Shadows::Maps | Shadows::Smerts => {
+                    plan.add(true, "map_build", maps);
+                    plan.add(
+                        true,
+                        "classify",
+                        format!("per light: occlusion map (bias {} texel footprints)", sh.bias),
+                    );
+                    if opts.shadows == Shadows::Smerts {
+                        plan.add(
+                            true,
+                            "borders",
+                            format!("{} borders, dilated by {} px", sh.borders.name(), sh.dilate),
+                        );
+                        plan.add(
+                            true,
+                            "shadow_rays",
+                            "one shadow ray per border pixel and light, occluder hint first".into(),
+                        );
+                    } else {
+                        plan.add(false, "borders", "shadows by maps alone: no borders, no rays".into());
+                    }
+                    plan.add(
+                        true,
+                        "direct",
+                        format!("{lights} point light(s), visibility from the occlusion maps"),
+                    );
+                }
+            }
         }
 
         let used_specular = scene.specular_materials_in_use();

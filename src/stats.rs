@@ -20,6 +20,12 @@ pub struct RenderStats<'a> {
     /// Every pass with the reason it ran or was skipped.
     pub plan_detail: &'a Plan,
     pub rays: serde_json::Value,
+    /// Per light, with map-based shadows: camera hits the map decided lit / shadowed, those
+    /// left undecided (given a shadow ray), map faces drawn, and with `--check-visibility` the
+    /// map decisions a shadow ray contradicts (`wrong`).
+    pub shadow_lights: Vec<crate::render::shadows::LightStats>,
+    /// Light maps built for this frame (0: all cached).
+    pub maps_built: u32,
     /// Milliseconds: `total` (BVH build + frame), `frame`, `bvh_build` and one entry per pass.
     pub time_ms: serde_json::Map<String, serde_json::Value>,
 }
@@ -54,9 +60,13 @@ impl<'a> RenderStats<'a> {
             options,
             plan: plan.pass_names(),
             plan_detail: plan,
+            shadow_lights: frame.lights.clone(),
+            maps_built: frame.maps_built,
             rays: serde_json::json!({
                 "primary": r.primary,
                 "shadow": r.shadow,
+                "shadow_hint_hits": r.shadow_hint_hits,
+                "shadow_traversals": r.shadow_traversals(),
                 "specular": r.specular,
                 "vpl_shadow": r.vpl_shadow,
                 "total": r.total(),

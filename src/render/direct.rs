@@ -3,47 +3,75 @@
 use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
+use hyrt_shadowmap::border::{LIT, NONE};
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
-use super::{Progress, Renderer, Shadows, SurfaceHit, shade_hits};
+use super::shadows::facing;
+use super::{Progress, Renderer, SurfaceHit, shade_hits, shadows::Shadowing};
 
-/// Shades every camera hit of the G-buffer with direct light.
-pub fn run(r: &Renderer, gbuffer: &[Option<Hit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
-    shade_hits(r, gbuffer, out, progress, |hit, c| shade(r, hit, c))
+/// Shades every camera hit of the G-buffer with direct light. With `shadowing` (map-based
+/// shadows), the visibility of each light is read from its final occlusion map (no rays here:
+/// the border rays were cast by `Shadowing::trace`); without it, one shadow ray per light.
+pub fn run(
+    r: &Renderer,
+    gbuffer: &[Option<Hit>],
+    shadowing: Option<&Shadowing>,
+    out: &mut [Vec3],
+    progress: Progress,
+) -> RayCounts {
+    shade_hits(r, gbuffer, out, progress, |i, hit, c| match shadowing {
+        None => shade(r, hit, c, |_, light, s, c| shadow_ray(s, &light.position, r, c)),
+        Some(sh) => shade(r, hit, c, |l, _, _, _| {
+            let o = sh.visible[l][i];
+            debug_assert!(o != NONE, "a facing light has a decision");
+            o == LIT
+        }),
+    })
+}
+
+/// Whether a shadow ray from `s` reaches `light` (the reference's test).
+fn shadow_ray(s: &SurfaceHit, light: &Vec3, r: &Renderer, c: &mut RayCounts) -> bool {
+    let ray = spawn_ray_to(s.p, s.p_err, s.ng, *light);
+    !r.tracer.occluded(&ray, RayKind::Shadow, c)
 }
 
 /// Diffuse direct light at `hit`: `L = Kd / pi * sum_lights I * cos(theta) / r^2` over the
-/// lights that are in front of the surface and unoccluded.
+/// lights that are in front of the surface and visible, `visible(l, light, hit, counts)`
+/// deciding visibility.
 ///
-/// No shadow ray is cast for a light behind the surface (by the shading or the geometric
+/// Visibility is not asked for a light behind the surface (by the shading or the geometric
 /// normal: a ray leaving through the back would only find the surface itself), nor on a
 /// surface without diffuse reflectance (a perfect mirror).
-pub fn shade(r: &Renderer, hit: &SurfaceHit, counts: &mut RayCounts) -> Vec3 {
+pub fn shade(
+    r: &Renderer,
+    hit: &SurfaceHit,
+    counts: &mut RayCounts,
+    mut visible: impl FnMut(usize, &crate::scene::PointLight, &SurfaceHit, &mut RayCounts) -> bool,
+) -> Vec3 {
     let m = &r.scene.materials[r.scene.material[hit.tri as usize] as usize];
     if m.kd == Vec3::ZERO {
         return Vec3::ZERO;
     }
     let mut sum = Vec3::ZERO;
-    for light in &r.scene.lights {
-        let to_light = light.position - hit.p;
-        let d2 = to_light.length_squared();
-        if d2 == 0.0 {
-            continue;
-        }
-        let wi = to_light / d2.sqrt();
-        let cos = hit.ns.dot(wi);
-        if cos <= 0.0 || hit.ng.dot(wi) <= 0.0 {
-            continue;
-        }
-        let visible = match r.options.shadows {
-            Shadows::Rays => {
-                let ray = spawn_ray_to(hit.p, hit.p_err, hit.ng, light.position);
-                !r.tracer.occluded(&ray, RayKind::Shadow, counts)
-            }
-        };
-        if visible {
+    for (l, light) in r.scene.lights.iter().enumerate() {
+        let Some((_, cos, d2)) = facing(hit, light) else { continue };
+        if visible(l, light, hit, counts) {
             sum += light.intensity * (cos / d2);
         }
     }
     m.kd * FRAC_1_PI * sum
+}
+
+/// [`shade`] at a point with no screen neighbours (a mirror hit): shadow rays, or the maps'
+/// map-space test with `shadowing`.
+pub fn shade_point(
+    r: &Renderer,
+    hit: &SurfaceHit,
+    shadowing: Option<&Shadowing>,
+    counts: &mut RayCounts,
+) -> Vec3 {
+    match shadowing {
+        None => shade(r, hit, counts, |_, light, s, c| shadow_ray(s, &light.position, r, c)),
+        Some(sh) => shade(r, hit, counts, |l, _, s, c| sh.visible_at(r, l, s, c)),
+    }
 }

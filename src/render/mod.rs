@@ -15,6 +15,7 @@
 
 pub mod cull;
 pub mod direct;
+pub mod shadows;
 pub mod specular;
 pub mod surface;
 pub mod visibility;
@@ -45,6 +46,60 @@ pub enum Shadows {
     /// One shadow ray per hit and light.
     #[default]
     Rays,
+    /// The light's depth map decides, no rays (the plain shadow-map baseline).
+    Maps,
+    /// SMeRTS: the map decides, except on shadow borders, where a shadow ray (occluder hint
+    /// first) does.
+    Smerts,
+}
+
+/// How SMeRTS finds the border pixels that get a shadow ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Borders {
+    /// The thesis: the Laplace kernel on the screen-space occlusion map.
+    Laplacian,
+    /// In the map: the texels around the point's projection disagree.
+    Depth,
+    /// Either.
+    Both,
+}
+
+/// How shadows are decided at mirror hits (which have no screen neighbours).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MirrorShadows {
+    /// The same maps, with the map-space border test (under `Shadows::Smerts`).
+    #[default]
+    Maps,
+    /// A shadow ray, as the thesis did.
+    Rays,
+}
+
+/// The knobs of map-based shadows (ignored by `Shadows::Rays`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowOptions {
+    /// Map kind, resolution, paraboloid tessellation.
+    pub map: hyrt_shadowmap::MapOptions,
+    /// Depth margin in texel footprints (see `hyrt_shadowmap::classify`).
+    pub bias: f32,
+    pub borders: Borders,
+    /// Border dilation radius in pixels.
+    pub dilate: u32,
+    pub mirror: MirrorShadows,
+}
+
+impl Default for ShadowOptions {
+    /// The hybrid defaults, chosen by measurement on the three thesis scenes at 640x480 (see
+    /// the README's SMeRTS section): cube maps of 2048x2048 per face, bias 1 texel footprint,
+    /// map-space borders without dilation.
+    fn default() -> Self {
+        Self {
+            map: hyrt_shadowmap::MapOptions { resolution: 2048, ..hyrt_shadowmap::MapOptions::default() },
+            bias: 1.0,
+            borders: Borders::Depth,
+            dilate: 0,
+            mirror: MirrorShadows::default(),
+        }
+    }
 }
 
 /// How indirect light is computed.
@@ -67,22 +122,55 @@ impl Shadows {
     pub fn name(self) -> &'static str {
         match self {
             Shadows::Rays => "rays",
+            Shadows::Maps => "maps",
+            Shadows::Smerts => "smerts",
+        }
+    }
+}
+
+impl Borders {
+    pub fn name(self) -> &'static str {
+        match self {
+            Borders::Laplacian => "laplacian",
+            Borders::Depth => "depth",
+            Borders::Both => "both",
         }
     }
 }
 
 /// The strategy of each stage. `Options::default()` is the Whitted reference.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Options {
     pub visibility: Visibility,
     pub shadows: Shadows,
+    pub shadow: ShadowOptions,
     pub indirect: Indirect,
+    /// Diagnostics: for every camera hit and light decided by a map, also cast a shadow ray
+    /// (not counted in the frame's rays) and count the decisions it contradicts
+    /// (`FrameStats::lights[l].wrong`).
+    pub check_visibility: bool,
+}
+
+impl Options {
+    /// The Whitted reference: rays everywhere.
+    pub fn reference() -> Self {
+        Self::default()
+    }
+
+    /// The hybrid: rasterized visibility and SMeRTS with the default knobs.
+    pub fn hybrid() -> Self {
+        Self { visibility: Visibility::Raster, shadows: Shadows::Smerts, ..Self::default() }
+    }
 }
 
 /// Per-frame statistics.
 #[derive(Clone, Debug, Default)]
 pub struct FrameStats {
     pub rays: RayCounts,
+    /// Light maps built (or extended) for this frame: 0 when all came from the cache.
+    pub maps_built: u32,
+    /// Per light: map decisions and borders (map-based shadows only).
+    pub lights: Vec<shadows::LightStats>,
     /// Milliseconds per pass, plus `total` for the frame (scene preparation excluded).
     pub time_ms: BTreeMap<&'static str, f64>,
 }
@@ -91,6 +179,9 @@ pub struct FrameStats {
 pub struct Frame {
     pub film: Film,
     pub stats: FrameStats,
+    /// With map-based shadows: the per-light occlusion, border, final and (with
+    /// `check_visibility`) wrong-decision buffers.
+    pub shadows: Option<shadows::ShadowBuffers>,
 }
 
 /// A scene prepared for rendering: its BVH and plan, built once and reused by every frame.
@@ -107,6 +198,8 @@ pub struct Renderer<'a> {
     /// Buffers of the raster visibility pass, kept between frames (see
     /// [`visibility::RasterScratch`]).
     raster: std::sync::Mutex<visibility::RasterScratch>,
+    /// Light maps, built on first use and kept while the scene is unchanged.
+    maps: shadows::MapCache,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -124,8 +217,8 @@ impl<'a> Renderer<'a> {
             Visibility::Raster => cull::Clusters::new(&scene.positions),
             Visibility::Rays => cull::Clusters::default(),
         };
-        let raster = Default::default();
-        Self { scene, tracer, plan, options, camera, raster_near, clusters, raster }
+        let (raster, maps) = Default::default();
+        Self { scene, tracer, plan, options, camera, raster_near, clusters, raster, maps }
     }
 
     /// Wall time of the BVH build, in milliseconds.
@@ -163,23 +256,32 @@ impl<'a> Renderer<'a> {
         stats.time_ms.insert("visibility", ms(t));
 
         let mut direct = vec![Vec3::ZERO; n];
+        let mut shadowing = None;
         if self.plan.runs("direct") {
+            if self.options.shadows != Shadows::Rays {
+                let mut s = self.shadowing(&gbuffer, &mut stats);
+                let t = Instant::now();
+                stats.rays += s.trace(self, self.options.check_visibility);
+                stats.time_ms.insert("shadow_rays", ms(t));
+                stats.lights = s.lights.clone();
+                shadowing = Some(s);
+            }
             let t = Instant::now();
-            stats.rays += direct::run(self, &gbuffer, &mut direct, progress);
+            stats.rays += direct::run(self, &gbuffer, shadowing.as_ref(), &mut direct, progress);
             stats.time_ms.insert("direct", ms(t));
         }
 
         let mut spec = vec![Vec3::ZERO; n];
         if self.plan.runs("specular") {
             let t = Instant::now();
-            stats.rays += specular::run(self, &gbuffer, &mut spec, progress);
+            stats.rays += specular::run(self, &gbuffer, shadowing.as_ref(), &mut spec, progress);
             stats.time_ms.insert("specular", ms(t));
         }
 
         let mut film = Film::new(w, h);
         film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + spec[i]);
         stats.time_ms.insert("total", ms(start));
-        Frame { film, stats }
+        Frame { film, stats, shadows: shadowing.map(shadows::Shadowing::into_buffers) }
     }
 }
 
@@ -208,22 +310,24 @@ pub(crate) fn par_rows<T: Send>(
         .sum()
 }
 
-/// Runs `shade` on the shading point of every pixel of `gbuffer` that has a hit, writing its
-/// result to `out` (pixels without a hit keep their value), in parallel rows as [`par_rows`].
+/// Runs `shade` on the pixel index and shading point of every pixel of `gbuffer` that has a
+/// hit, writing its result to `out` (pixels without a hit keep their value), in parallel rows
+/// as [`par_rows`].
 pub(crate) fn shade_hits(
     r: &Renderer,
     gbuffer: &[Option<Hit>],
     out: &mut [Vec3],
     progress: Progress,
-    shade: impl Fn(&SurfaceHit, &mut RayCounts) -> Vec3 + Sync,
+    shade: impl Fn(usize, &SurfaceHit, &mut RayCounts) -> Vec3 + Sync,
 ) -> RayCounts {
     let w = r.scene.settings.width as usize;
     par_rows(out, w, progress, |y, row, c| {
-        let hits = &gbuffer[y as usize * w..][..row.len()];
+        let first = y as usize * w;
+        let hits = &gbuffer[first..][..row.len()];
         for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
             if let Some(hit) = hit {
                 let dir = r.camera_ray(x as u32, y).dir;
-                *px = shade(&SurfaceHit::new(r.scene, hit, dir), c);
+                *px = shade(first + x, &SurfaceHit::new(r.scene, hit, dir), c);
             }
         }
     })

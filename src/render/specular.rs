@@ -3,17 +3,30 @@
 use glam::Vec3;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray};
 
-use super::{Progress, Renderer, SurfaceHit, direct, shade_hits};
+use super::{Progress, Renderer, SurfaceHit, direct, shade_hits, shadows::Shadowing};
 
-/// Adds the mirror-reflected light of every camera hit on a specular material.
-pub fn run(r: &Renderer, gbuffer: &[Option<Hit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
-    shade_hits(r, gbuffer, out, progress, |hit, c| reflected(r, hit, c))
+/// Adds the mirror-reflected light of every camera hit on a specular material; the surfaces
+/// the mirror paths meet decide shadows with `shadowing`'s maps when given (see
+/// `direct::shade_point`).
+pub fn run(
+    r: &Renderer,
+    gbuffer: &[Option<Hit>],
+    shadowing: Option<&Shadowing>,
+    out: &mut [Vec3],
+    progress: Progress,
+) -> RayCounts {
+    shade_hits(r, gbuffer, out, progress, |_, hit, c| reflected(r, hit, shadowing, c))
 }
 
 /// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces;
 /// each reflection is weighted by the product of `Ks` so far, and each surface it meets is
 /// shaded with direct light (and its own reflection, while depth remains).
-pub fn reflected(r: &Renderer, first: &SurfaceHit, counts: &mut RayCounts) -> Vec3 {
+pub fn reflected(
+    r: &Renderer,
+    first: &SurfaceHit,
+    shadowing: Option<&Shadowing>,
+    counts: &mut RayCounts,
+) -> Vec3 {
     let mut sum = Vec3::ZERO;
     let mut weight = Vec3::ONE;
     let mut hit = *first;
@@ -34,7 +47,7 @@ pub fn reflected(r: &Renderer, first: &SurfaceHit, counts: &mut RayCounts) -> Ve
             break;
         };
         hit = SurfaceHit::new(r.scene, &h, ray.dir);
-        sum += weight * direct::shade(r, &hit, counts);
+        sum += weight * direct::shade_point(r, &hit, shadowing, counts);
     }
     sum
 }

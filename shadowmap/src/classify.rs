@@ -48,7 +48,7 @@
 use glam::{Vec3, Vec4};
 
 use crate::border::{LIT, SHADOW};
-use crate::map::{EMPTY, LightMap};
+use crate::map::{EMPTY, LightMap, MapKind};
 
 /// A texel decision between lit and shadowed (see [`Classifier::classify`]); never stored.
 const AMBIGUOUS: u8 = 3;
@@ -108,74 +108,81 @@ pub struct Classifier<'a> {
 impl Classifier<'_> {
     /// Classifies point `p` of triangle `own` (module docs). `p` must differ from the light.
     pub fn classify(&self, p: Vec3, own: u32) -> Lookup {
-        let light = self.map.light();
+        let map = self.map;
+        let light = map.light();
         let v = p - light;
+        let c = map.coord(v);
+        let res = map.resolution();
+        let last = res.saturating_sub(1);
+        let ids = map.face_ids(c.face);
+        let at = |x: u32, y: u32| ids.get(map.texel_index(x, y)).copied().unwrap_or(EMPTY);
+        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
+        let centre = at(ix, iy);
+
+        // The 2x2 texels whose centres surround the projection (the texel containing it is one
+        // of them).
+        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
+        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32;
+        let (x0, y0) = (fx as u32, fy as u32);
+        let foot = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
+        let in_domain = inside
+            && (map.kind() == MapKind::Cube || foot.iter().all(|&(x, y)| map.texel_in_domain(c.face, x, y)));
+        let foot_ids = if inside { foot.map(|(x, y)| at(x, y)) } else { [centre; 4] };
+        let texel = [ix, iy];
+
+        // Most points see only their own triangle (or nothing) all around: lit, no border, and
+        // no arithmetic. This is the rule below with every texel deciding `LIT`.
+        if in_domain && foot_ids.iter().all(|&id| id == own || id == EMPTY) {
+            return Lookup { decision: LIT, hint: EMPTY, map_border: false, face: c.face, texel };
+        }
+
         let r = v.length();
         let dir = v / r;
-        let c = self.map.coord(v);
-        let res = self.map.resolution();
         // The reference's shadow ray from `p` ignores occluders within `SHADOW_EPSILON r` of
         // the light, and (by its origin offset) only those within rounding of `p`. Occluders
         // between `r - margin` and `r - tol` may be a neighbouring triangle's plane extended
         // past a crease, or a true contact shadow: undecided (module docs).
         let near = SHADOW_EPSILON * r;
         let tol = TOLERANCE * (r + p.abs().max_element());
-        let margin = self.bias * self.map.texel_angle(c) * r + tol;
-        let decide = |ix: u32, iy: u32| -> (u8, u32) {
-            let id = self.map.id(c.face, ix, iy);
+        let margin = self.bias * map.texel_angle(c) * r + tol;
+        let decide = |id: u32, (x, y): (u32, u32)| -> u8 {
             if id == EMPTY || id == own {
-                return (LIT, id);
+                return LIT;
             }
             let pl = self.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
             let n = pl.truncate();
             let cos = n.dot(dir);
-            let t =
-                if cos.abs() >= 1e-6 { (pl.w - n.dot(light)) / cos } else { self.map.depth(c.face, ix, iy) };
-            let d = if !(t > near && t < r - tol) {
+            let t = if cos.abs() >= 1e-6 { (pl.w - n.dot(light)) / cos } else { map.depth(c.face, x, y) };
+            if !(t > near && t < r - tol) {
                 LIT
             } else if t < r - margin {
                 SHADOW
             } else {
                 AMBIGUOUS
-            };
-            (d, id)
+            }
         };
-        let last = res.saturating_sub(1);
-        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-        let (d, id) = decide(ix, iy);
-        let mut hint = if d != LIT { id } else { EMPTY };
+        let d = decide(centre, (ix, iy));
+        let mut hint = if d != LIT { centre } else { EMPTY };
         // An ambiguous texel leans to shadow (an occluder is there, only closer than the bias
         // can tell), and is a border.
         let decision = if d == LIT { LIT } else { SHADOW };
-        let mut map_border = d == AMBIGUOUS;
-
-        // The 2x2 texels whose centres surround the projection.
-        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
-        map_border |= !(fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32);
+        let mut map_border = d == AMBIGUOUS || !in_domain;
         if !map_border {
-            let (x0, y0) = (fx as u32, fy as u32);
-            let (mut seen, mut n) = ([EMPTY; 4], 0);
-            for (x, y) in [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)] {
-                if !self.map.texel_in_domain(c.face, x, y) {
-                    map_border = true;
-                    break;
-                }
-                // Most footprints see one or two triangles: decide each once.
-                let id = self.map.id(c.face, x, y);
+            // Most footprints see one or two triangles: decide each once.
+            let (mut seen, mut n) = ([centre, EMPTY, EMPTY, EMPTY], 1);
+            for (&id, &xy) in foot_ids.iter().zip(&foot) {
                 if seen[..n].contains(&id) {
                     continue;
                 }
                 seen[n] = id;
                 n += 1;
-                let (d, id) = decide(x, y);
-                if d != decision {
-                    map_border = true;
-                }
+                let d = decide(id, xy);
+                map_border |= d != decision;
                 if d != LIT && hint == EMPTY {
                     hint = id;
                 }
             }
         }
-        Lookup { decision, hint, map_border, face: c.face, texel: [ix, iy] }
+        Lookup { decision, hint, map_border, face: c.face, texel }
     }
 }

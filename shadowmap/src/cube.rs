@@ -15,6 +15,7 @@ pub enum CubeFace {
 
 /// The face a direction falls on (its largest |component|, ties to x then y) and the
 /// coordinates in `[-1, 1]^2` on that face: the other two components divided by the major one.
+#[inline]
 pub fn cube_lookup(d: Vec3) -> (CubeFace, Vec2) {
     let a = d.abs();
     if a.x >= a.y && a.x >= a.z {

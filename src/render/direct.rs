@@ -7,7 +7,7 @@ use hyrt_shadowmap::border::{LIT, NONE};
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
 use super::shadows::facing;
-use super::{Progress, Renderer, SurfaceHit, shade_hits, shadows::Shadowing};
+use super::{Progress, Renderer, SurfaceHit, par_rows, shade_hits, shadows::Shadowing};
 
 /// Shades every camera hit of the G-buffer with direct light. With `shadowing` (map-based
 /// shadows), the visibility of each light is read from its final occlusion map (no rays here:
@@ -19,14 +19,25 @@ pub fn run(
     out: &mut [Vec3],
     progress: Progress,
 ) -> RayCounts {
-    shade_hits(r, gbuffer, out, progress, |i, hit, c| match shadowing {
-        None => shade(r, hit, c, |_, light, s, c| shadow_ray(s, &light.position, r, c)),
-        Some(sh) => shade(r, hit, c, |l, _, _, _| {
-            let o = sh.visible[l][i];
-            debug_assert!(o != NONE, "a facing light has a decision");
-            o == LIT
+    match shadowing {
+        None => shade_hits(r, gbuffer, out, progress, |_, hit, c| {
+            shade(r, hit, c, |_, light, s, c| shadow_ray(s, &light.position, r, c))
         }),
-    })
+        // The shading points were built by the shadow passes: reuse them.
+        Some(sh) => par_rows(out, r.scene.settings.width as usize, progress, |y, row, c| {
+            let first = y as usize * row.len();
+            for (x, px) in row.iter_mut().enumerate() {
+                let i = first + x;
+                if let Some(s) = &sh.bufs.surf[i] {
+                    *px = shade(r, s, c, |l, _, _, _| {
+                        let o = sh.bufs.occ[l][i];
+                        debug_assert!(o != NONE, "a facing light has a decision");
+                        o == LIT
+                    });
+                }
+            }
+        }),
+    }
 }
 
 /// Whether a shadow ray from `s` reaches `light` (the reference's test).

@@ -149,6 +149,9 @@ pub struct Options {
     /// (not counted in the frame's rays) and count the decisions it contradicts
     /// (`FrameStats::lights[l].wrong`).
     pub check_visibility: bool,
+    /// Return the per-pixel shadow buffers in [`Frame::shadows`] (for inspection); otherwise
+    /// the renderer keeps them for the next frame.
+    pub keep_buffers: bool,
 }
 
 impl Options {
@@ -179,8 +182,8 @@ pub struct FrameStats {
 pub struct Frame {
     pub film: Film,
     pub stats: FrameStats,
-    /// With map-based shadows: the per-light occlusion, border, final and (with
-    /// `check_visibility`) wrong-decision buffers.
+    /// With map-based shadows and `Options::keep_buffers`: the per-light occlusion, border and
+    /// (with `check_visibility`) wrong-decision buffers.
     pub shadows: Option<shadows::ShadowBuffers>,
 }
 
@@ -281,7 +284,15 @@ impl<'a> Renderer<'a> {
         let mut film = Film::new(w, h);
         film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + spec[i]);
         stats.time_ms.insert("total", ms(start));
-        Frame { film, stats, shadows: shadowing.map(shadows::Shadowing::into_buffers) }
+        let shadows = shadowing.map(|s| s.bufs).and_then(|b| {
+            if self.options.keep_buffers {
+                Some(b)
+            } else {
+                self.recycle(b);
+                None
+            }
+        });
+        Frame { film, stats, shadows }
     }
 }
 

@@ -7,9 +7,8 @@
 //! classify     per light: occlusion map  occ[l]: LIT | SHADOW | NONE (light behind the surface),
 //!              hint[l]: occluder triangle, map_border[l]: the 2x2 texel footprint disagrees
 //! borders      per light (Smerts): undecided[l] = dilate(laplacian(occ[l]) | map_border[l], R)
-//! shadow_rays  visible[l] = occ[l], except per undecided (pixel, light): a shadow ray, hint
-//!              first
-//! direct       shading with visible (no rays)
+//! shadow_rays  per undecided (pixel, light): a shadow ray, hint first, its answer into occ[l]
+//! direct       shading with occ (no rays)
 //! ```
 //!
 //! With `Shadows::Maps` the map's decision is final (no borders, no rays): the pure shadow-map
@@ -49,11 +48,18 @@ pub fn facing(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32, f32)> 
     Some((wi, cos, d2))
 }
 
-/// Per-scene cache of the light maps (and the triangle planes their classification needs).
+/// Per-renderer state of map-based shadows: the light maps (and the triangle planes their
+/// classification needs), and the per-pixel buffers, recycled from frame to frame.
 #[derive(Default)]
 pub(crate) struct MapCache {
     maps: Mutex<Vec<Option<Arc<LightMap>>>>,
     planes: std::sync::OnceLock<Vec<Vec4>>,
+    /// Per light and face, whether a camera hit falls on it: a renderer's scene and camera are
+    /// fixed, so this is computed on the first frame only.
+    needed: std::sync::OnceLock<Vec<bool>>,
+    /// Buffers of the last frame, reused (allocating ~10 bytes per pixel and light afresh cost
+    /// a fifth of the frame in page faults).
+    scratch: Mutex<ShadowBuffers>,
 }
 
 /// Per-light classification counts of one frame (camera hits only).
@@ -70,39 +76,47 @@ pub struct LightStats {
     pub wrong: Option<u64>,
 }
 
-/// The per-light, per-pixel buffers of a frame's map-based shadows (see [`Shadowing`]), kept
-/// in the [`super::Frame`] for inspection.
+/// The per-pixel buffers of a frame's map-based shadows, one vector per light, row-major. Kept
+/// in the [`super::Frame`] with `Options::keep_buffers` (for inspection).
 #[derive(Clone, Debug, Default)]
 pub struct ShadowBuffers {
+    /// The decision: [`LIT`], [`SHADOW`] or [`NONE`] (no decision needed: no hit, the light
+    /// behind the surface, or no diffuse reflectance). The map's, except on undecided pixels,
+    /// where the shadow ray's answer replaces it.
     pub occ: Vec<Vec<u8>>,
+    /// Pixels decided by a shadow ray (borders after dilation; empty under `Shadows::Maps`).
     pub undecided: Vec<Vec<bool>>,
-    pub visible: Vec<Vec<u8>>,
-    pub wrong: Vec<Vec<bool>>,
+    /// The occluder hint of each pixel (a triangle id, or `EMPTY`).
     pub hint: Vec<Vec<u32>>,
-}
-
-/// The per-light buffers of one frame.
-pub struct Shadowing<'r> {
-    pub maps: Vec<Arc<LightMap>>,
-    /// `occ[l][pixel]`: the map's decision, [`LIT`], [`SHADOW`] or [`NONE`].
-    pub occ: Vec<Vec<u8>>,
-    /// `visible[l][pixel]`: the final decision, after [`Shadowing::trace`].
-    pub visible: Vec<Vec<u8>>,
+    /// The map-space border test's verdict.
+    pub map_border: Vec<Vec<bool>>,
     /// With `check_visibility`: the map decisions a shadow ray contradicts (else empty).
     pub wrong: Vec<Vec<bool>>,
-    pub hint: Vec<Vec<u32>>,
-    /// Undecided pixels (borders, after dilation); empty vectors for `Shadows::Maps`.
-    pub undecided: Vec<Vec<bool>>,
+    /// The shading points of the camera hits.
+    pub(crate) surf: Vec<Option<SurfaceHit>>,
+}
+
+/// Resizes `v` to `n` buffers of `len` elements equal to `fill`, reusing their memory.
+fn reset<T: Clone>(v: &mut Vec<Vec<T>>, n: usize, len: usize, fill: T) {
+    v.resize_with(n, Vec::new);
+    for b in v.iter_mut() {
+        b.clear();
+        b.resize(len, fill.clone());
+    }
+}
+
+/// One frame's map-based shadows: the maps used and the per-pixel buffers.
+pub struct Shadowing<'r> {
+    pub maps: Vec<Arc<LightMap>>,
+    pub bufs: ShadowBuffers,
     pub lights: Vec<LightStats>,
     planes: &'r [Vec4],
-    /// The camera hits' shading points.
-    surf: Vec<Option<SurfaceHit>>,
 }
 
 impl Renderer<'_> {
     /// Whether direct light is computed at `s` at all: not on surfaces without a diffuse
     /// reflectance (perfect mirrors), where the reference casts no shadow ray either.
-    fn needs_light(&self, s: &SurfaceHit) -> bool {
+    pub(crate) fn needs_light(&self, s: &SurfaceHit) -> bool {
         self.scene.materials[self.scene.material[s.tri as usize] as usize].kd != Vec3::ZERO
     }
 
@@ -118,25 +132,27 @@ impl Renderer<'_> {
         let lights = &self.scene.lights;
         // Faces needed: per light, any hit the light faces whose direction falls on the face.
         let w = self.scene.settings.width as usize;
-        let needed = surf
-            .par_chunks(w.max(1))
-            .fold(
-                || vec![false; lights.len() * nf],
-                |mut acc, row| {
-                    for s in row.iter().flatten().filter(|s| self.needs_light(s)) {
-                        for (l, light) in lights.iter().enumerate() {
-                            if facing(s, light).is_some() {
-                                acc[l * nf + LightMap::face_of(kind, s.p - light.position) as usize] = true;
+        let needed = self.maps.needed.get_or_init(|| {
+            surf.par_chunks(w.max(1))
+                .fold(
+                    || vec![false; lights.len() * nf],
+                    |mut acc, row| {
+                        for s in row.iter().flatten().filter(|s| self.needs_light(s)) {
+                            for (l, light) in lights.iter().enumerate() {
+                                if facing(s, light).is_some() {
+                                    acc[l * nf + LightMap::face_of(kind, s.p - light.position) as usize] =
+                                        true;
+                                }
                             }
                         }
-                    }
-                    acc
-                },
-            )
-            .reduce(
-                || vec![false; lights.len() * nf],
-                |a, b| a.iter().zip(&b).map(|(x, y)| *x | *y).collect(),
-            );
+                        acc
+                    },
+                )
+                .reduce(
+                    || vec![false; lights.len() * nf],
+                    |a, b| a.iter().zip(&b).map(|(x, y)| *x | *y).collect(),
+                )
+        });
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
         cache.resize(lights.len(), None);
         let mut built = 0;
@@ -161,9 +177,11 @@ impl Renderer<'_> {
     /// The map-build, classify and borders passes for the camera hits (module docs).
     pub(crate) fn shadowing<'r>(&'r self, gbuffer: &[Option<Hit>], stats: &mut FrameStats) -> Shadowing<'r> {
         let t = Instant::now();
-        let w = self.scene.settings.width as usize;
+        let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
+        let n = w * h;
+        let nl = self.scene.lights.len();
+        let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
         // The shading points, once for all lights and passes.
-        let mut surf = Vec::with_capacity(gbuffer.len());
         gbuffer
             .par_iter()
             .enumerate()
@@ -171,75 +189,88 @@ impl Renderer<'_> {
                 let (x, y) = ((i % w) as u32, (i / w) as u32);
                 hit.as_ref().map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x, y).dir))
             })
-            .collect_into_vec(&mut surf);
+            .collect_into_vec(&mut bufs.surf);
         stats.time_ms.insert("surface", ms(t));
 
         let t = Instant::now();
-        let (maps, built) = self.light_maps(&surf);
+        let (maps, built) = self.light_maps(&bufs.surf);
         stats.time_ms.insert("map_build", ms(t));
         stats.maps_built = built;
 
         let t = Instant::now();
         let planes: &'r [Vec4] = self.planes();
-        let h = self.scene.settings.height as usize;
         let bias = self.options.shadow.bias;
-        let mut occ = Vec::with_capacity(maps.len());
-        let mut hint = Vec::with_capacity(maps.len());
-        let mut map_border = Vec::with_capacity(maps.len());
-        for (light, map) in self.scene.lights.iter().zip(&maps) {
+        reset(&mut bufs.occ, nl, n, NONE);
+        reset(&mut bufs.hint, nl, n, EMPTY);
+        reset(&mut bufs.map_border, nl, n, false);
+        // Bands of TILE rows, visited in TILE x TILE pixel tiles: neighbouring pixels look up
+        // neighbouring texels, and a tile's texels stay in the cache (scan lines sweep long
+        // strips across the map).
+        const TILE: usize = 8;
+        let band = (TILE * w).max(1);
+        for ((light, map), ((occ, hint), mb)) in self
+            .scene
+            .lights
+            .iter()
+            .zip(&maps)
+            .zip(bufs.occ.iter_mut().zip(&mut bufs.hint).zip(&mut bufs.map_border))
+        {
             let cls = Classifier { map, planes, bias };
-            let mut o = vec![NONE; w * h];
-            let mut hi = vec![EMPTY; w * h];
-            let mut mb = vec![false; w * h];
-            o.par_chunks_mut(w.max(1))
-                .zip(hi.par_chunks_mut(w.max(1)))
-                .zip(mb.par_chunks_mut(w.max(1)))
-                .zip(surf.par_chunks(w.max(1)))
+            occ.par_chunks_mut(band)
+                .zip(hint.par_chunks_mut(band))
+                .zip(mb.par_chunks_mut(band))
+                .zip(bufs.surf.par_chunks(band))
                 .for_each(|(((o, hi), mb), surf)| {
-                    for (x, s) in surf.iter().enumerate() {
-                        let Some(s) = s else { continue };
-                        if !self.needs_light(s) || facing(s, light).is_none() {
-                            continue;
+                    let rows = surf.len() / w.max(1);
+                    for x0 in (0..w).step_by(TILE) {
+                        for y in 0..rows {
+                            for i in y * w + x0..y * w + (x0 + TILE).min(w) {
+                                let Some(s) = &surf[i] else { continue };
+                                if !self.needs_light(s) || facing(s, light).is_none() {
+                                    continue;
+                                }
+                                let lk = cls.classify(s.p, s.tri);
+                                o[i] = lk.decision;
+                                hi[i] = lk.hint;
+                                mb[i] = lk.map_border;
+                            }
                         }
-                        let lk = cls.classify(s.p, s.tri);
-                        o[x] = lk.decision;
-                        hi[x] = lk.hint;
-                        mb[x] = lk.map_border;
                     }
                 });
-            occ.push(o);
-            hint.push(hi);
-            map_border.push(mb);
         }
         stats.time_ms.insert("classify", ms(t));
 
         let t = Instant::now();
         let opts = &self.options.shadow;
-        let undecided: Vec<Vec<bool>> = if self.options.shadows == Shadows::Smerts {
-            occ.iter()
-                .zip(&map_border)
-                .map(|(o, mb)| {
-                    let mut b = match opts.borders {
-                        Borders::Depth => vec![false; w * h],
-                        Borders::Laplacian | Borders::Both => laplacian_border(o, w, h),
-                    };
-                    if opts.borders != Borders::Laplacian {
+        if self.options.shadows == Shadows::Smerts {
+            bufs.undecided.resize_with(nl, Vec::new);
+            for ((u, o), mb) in bufs.undecided.iter_mut().zip(&bufs.occ).zip(&bufs.map_border) {
+                let mut b = match opts.borders {
+                    Borders::Depth => mb.clone(),
+                    Borders::Laplacian => laplacian_border(o, w, h),
+                    Borders::Both => {
+                        let mut b = laplacian_border(o, w, h);
                         b.par_iter_mut().zip(mb).for_each(|(b, m)| *b |= *m);
+                        b
                     }
-                    let mut d = dilate(&b, w, h, opts.dilate as usize);
-                    // Only pixels the light faces need a decision.
-                    d.par_iter_mut().zip(o).for_each(|(d, o)| *d &= *o != NONE);
-                    d
-                })
-                .collect()
+                };
+                if opts.dilate > 0 {
+                    b = dilate(&b, w, h, opts.dilate as usize);
+                }
+                // Only pixels with a decision to make.
+                b.par_iter_mut().zip(o).for_each(|(d, o)| *d &= *o != NONE);
+                *u = b;
+            }
         } else {
-            vec![Vec::new(); maps.len()]
-        };
+            bufs.undecided.clear();
+            bufs.undecided.resize_with(nl, Vec::new);
+        }
         stats.time_ms.insert("borders", ms(t));
 
-        let lights = occ
-            .iter()
-            .zip(&undecided)
+        let lights = bufs
+            .occ
+            .par_iter()
+            .zip(&bufs.undecided)
             .zip(&maps)
             .map(|((o, u), m)| {
                 let mut s = LightStats {
@@ -261,8 +292,12 @@ impl Renderer<'_> {
                 s
             })
             .collect();
-        let (visible, wrong) = (Vec::new(), Vec::new());
-        Shadowing { maps, occ, visible, wrong, hint, undecided, lights, planes, surf }
+        Shadowing { maps, bufs, lights, planes }
+    }
+
+    /// Keeps a frame's buffers for the next frame.
+    pub(crate) fn recycle(&self, bufs: ShadowBuffers) {
+        *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()) = bufs;
     }
 }
 
@@ -271,36 +306,43 @@ impl Shadowing<'_> {
     /// answer replaces the map's in `occ`. With `check` (wrong-visibility count), also a ray
     /// per decided (pixel, light), not counted as a frame ray, comparing the map's decision.
     pub fn trace(&mut self, r: &Renderer, check: bool) -> RayCounts {
-        let w = r.scene.settings.width as usize;
+        let w = r.scene.settings.width.max(1) as usize;
+        let n = self.bufs.surf.len();
+        let nl = self.maps.len();
         let mut total = RayCounts::default();
-        self.visible = self.occ.clone();
-        self.wrong = if check { vec![vec![false; self.surf.len()]; self.maps.len()] } else { Vec::new() };
-        for (l, visible) in self.visible.iter_mut().enumerate() {
-            let light = &r.scene.lights[l];
-            let (hint, und, surf) = (&self.hint[l], &self.undecided[l], &self.surf);
-            let mut wrong = self.wrong.get_mut(l).map(std::mem::take).unwrap_or_default();
-            let mut rows: Vec<&mut [bool]> = wrong.chunks_mut(w.max(1)).collect();
-            rows.resize_with(visible.len().div_ceil(w.max(1)), Default::default);
-            let counts: Vec<RayCounts> = visible
-                .par_chunks_mut(w.max(1))
-                .zip(rows.into_par_iter())
+        if check {
+            reset(&mut self.bufs.wrong, nl, n, false);
+        } else {
+            self.bufs.wrong.clear();
+        }
+        let b = &mut self.bufs;
+        for l in 0..nl {
+            let light = r.scene.lights[l].position;
+            let (occ, hint, und, surf) = (&mut b.occ[l], &b.hint[l], &b.undecided[l], &b.surf);
+            let mut no_check = Vec::new();
+            let wrong = b.wrong.get_mut(l).unwrap_or(&mut no_check);
+            let wrong_rows: Vec<&mut [bool]> = if check {
+                wrong.chunks_mut(w).collect()
+            } else {
+                (0..n.div_ceil(w)).map(|_| &mut [][..]).collect()
+            };
+            let counts: Vec<RayCounts> = occ
+                .par_chunks_mut(w)
+                .zip(wrong_rows)
                 .enumerate()
                 .map(|(y, (row, wrong_row))| {
                     let mut c = RayCounts::default();
                     for (x, o) in row.iter_mut().enumerate() {
                         let i = y * w + x;
-                        if *o == NONE {
-                            continue;
-                        }
                         let is_und = und.get(i).copied().unwrap_or(false);
-                        if !is_und && !check {
+                        if *o == NONE || !(is_und || check) {
                             continue;
                         }
                         let s = surf[i].as_ref().expect("classified pixels have a hit");
-                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, light.position);
+                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
                         if is_und {
-                            *o =
-                                if r.tracer.occluded_with_hint(&ray, hint[i], &mut c) { SHADOW } else { LIT };
+                            let blocked = r.tracer.occluded_with_hint(&ray, hint[i], &mut c);
+                            *o = if blocked { SHADOW } else { LIT };
                         } else {
                             let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
                             wrong_row[x] = truth != (*o == SHADOW);
@@ -311,22 +353,10 @@ impl Shadowing<'_> {
                 .collect();
             total += counts.into_iter().sum();
             if check {
-                self.lights[l].wrong = Some(wrong.iter().filter(|&&b| b).count() as u64);
-                self.wrong[l] = wrong;
+                self.lights[l].wrong = Some(b.wrong[l].iter().filter(|&&x| x).count() as u64);
             }
         }
         total
-    }
-
-    /// The per-pixel buffers, for inspection after the frame.
-    pub fn into_buffers(self) -> ShadowBuffers {
-        ShadowBuffers {
-            occ: self.occ,
-            undecided: self.undecided,
-            visible: self.visible,
-            wrong: self.wrong,
-            hint: self.hint,
-        }
     }
 
     /// Visibility of light `l` from a mirror hit (no screen neighbours): the map's decision, or,

@@ -48,7 +48,7 @@
 use glam::{Vec3, Vec4};
 
 use crate::border::{LIT, SHADOW};
-use crate::map::{EMPTY, LightMap, MapKind};
+use crate::map::{EMPTY, LightMap, MapCoord, MapKind};
 
 /// A texel decision between lit and shadowed (see [`Classifier::classify`]); never stored.
 const AMBIGUOUS: u8 = 3;
@@ -107,11 +107,50 @@ pub struct Classifier<'a> {
 
 impl Classifier<'_> {
     /// Classifies point `p` of triangle `own` (module docs). `p` must differ from the light.
+    #[inline]
     pub fn classify(&self, p: Vec3, own: u32) -> Lookup {
+        self.classify_at(p, own, self.locate(p))
+    }
+
+    /// Where `p` falls in the map: the first half of [`Classifier::classify`], for callers that
+    /// locate a batch of points first and [`Classifier::prefetch`] their texels, so that the
+    /// cache misses of the batch overlap instead of stalling one point at a time (a 2048^2 face
+    /// is 16 MB; at most resolutions nearly every point's texels are a new cache line).
+    #[inline]
+    pub fn locate(&self, p: Vec3) -> MapCoord {
+        self.map.coord(p - self.map.light())
+    }
+
+    /// Starts loading the texels around `c` into the cache. A hint only.
+    #[inline]
+    pub fn prefetch(&self, c: MapCoord) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let ids = self.map.face_ids(c.face);
+            let last = self.map.resolution().saturating_sub(1);
+            let (x, y) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
+            // The 2x2 footprint spans at most two block rows; the texel's own block and the one
+            // below or above it cover most footprints.
+            let y2 = if c.y - y as f32 >= 0.5 { (y + 1).min(last) } else { y.saturating_sub(1) };
+            for yy in [y, y2] {
+                if let Some(t) = ids.get(self.map.texel_index(x, yy)) {
+                    // SAFETY: prefetching has no effect on memory or on the program's state; SSE
+                    // is part of x86-64.
+                    unsafe { _mm_prefetch::<_MM_HINT_T0>((t as *const u32).cast()) };
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = c;
+    }
+
+    /// [`Classifier::classify`] with `p`'s location `c` from [`Classifier::locate`].
+    #[inline]
+    pub fn classify_at(&self, p: Vec3, own: u32, c: MapCoord) -> Lookup {
         let map = self.map;
         let light = map.light();
         let v = p - light;
-        let c = map.coord(v);
         let res = map.resolution();
         let last = res.saturating_sub(1);
         let ids = map.face_ids(c.face);

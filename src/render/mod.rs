@@ -331,12 +331,24 @@ pub(crate) fn shade_hits(
     progress: Progress,
     shade: impl Fn(usize, &SurfaceHit, &mut RayCounts) -> Vec3 + Sync,
 ) -> RayCounts {
+    shade_hits_where(r, gbuffer, out, progress, |_| true, shade)
+}
+
+/// [`shade_hits`] on the hits that pass `filter` only.
+pub(crate) fn shade_hits_where(
+    r: &Renderer,
+    gbuffer: &[Option<Hit>],
+    out: &mut [Vec3],
+    progress: Progress,
+    filter: impl Fn(&Hit) -> bool + Sync,
+    shade: impl Fn(usize, &SurfaceHit, &mut RayCounts) -> Vec3 + Sync,
+) -> RayCounts {
     let w = r.scene.settings.width as usize;
     par_rows(out, w, progress, |y, row, c| {
         let first = y as usize * w;
         let hits = &gbuffer[first..][..row.len()];
         for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
-            if let Some(hit) = hit {
+            if let Some(hit) = hit.as_ref().filter(|h| filter(h)) {
                 let dir = r.camera_ray(x as u32, y).dir;
                 *px = shade(first + x, &SurfaceHit::new(r.scene, hit, dir), c);
             }

@@ -116,8 +116,8 @@ pub struct Shadowing<'r> {
 impl Renderer<'_> {
     /// Whether direct light is computed at `s` at all: not on surfaces without a diffuse
     /// reflectance (perfect mirrors), where the reference casts no shadow ray either.
-    pub(crate) fn needs_light(&self, s: &SurfaceHit) -> bool {
-        self.scene.materials[self.scene.material[s.tri as usize] as usize].kd != Vec3::ZERO
+    pub(crate) fn needs_light(&self, tri: u32) -> bool {
+        self.scene.materials[self.scene.material[tri as usize] as usize].kd != Vec3::ZERO
     }
 
     fn planes(&self) -> &[Vec4] {
@@ -137,7 +137,7 @@ impl Renderer<'_> {
                 .fold(
                     || vec![false; lights.len() * nf],
                     |mut acc, row| {
-                        for s in row.iter().flatten().filter(|s| self.needs_light(s)) {
+                        for s in row.iter().flatten() {
                             for (l, light) in lights.iter().enumerate() {
                                 if facing(s, light).is_some() {
                                     acc[l * nf + LightMap::face_of(kind, s.p - light.position) as usize] =
@@ -181,13 +181,16 @@ impl Renderer<'_> {
         let n = w * h;
         let nl = self.scene.lights.len();
         let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
-        // The shading points, once for all lights and passes.
+        // The shading points, once for all lights and passes; only where direct light is
+        // computed at all (surfaces with a diffuse reflectance).
         gbuffer
             .par_iter()
             .enumerate()
             .map(|(i, hit)| {
                 let (x, y) = ((i % w) as u32, (i / w) as u32);
-                hit.as_ref().map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x, y).dir))
+                hit.as_ref()
+                    .filter(|h| self.needs_light(h.tri))
+                    .map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x, y).dir))
             })
             .collect_into_vec(&mut bufs.surf);
         stats.time_ms.insert("surface", ms(t));
@@ -222,18 +225,28 @@ impl Renderer<'_> {
                 .zip(bufs.surf.par_chunks(band))
                 .for_each(|(((o, hi), mb), surf)| {
                     let rows = surf.len() / w.max(1);
+                    // Per tile, first locate every point and prefetch its texels, then decide:
+                    // the tile's cache misses overlap.
+                    let mut located = Vec::with_capacity(TILE * TILE);
                     for x0 in (0..w).step_by(TILE) {
+                        located.clear();
                         for y in 0..rows {
                             for i in y * w + x0..y * w + (x0 + TILE).min(w) {
                                 let Some(s) = &surf[i] else { continue };
-                                if !self.needs_light(s) || facing(s, light).is_none() {
+                                if facing(s, light).is_none() {
                                     continue;
                                 }
-                                let lk = cls.classify(s.p, s.tri);
-                                o[i] = lk.decision;
-                                hi[i] = lk.hint;
-                                mb[i] = lk.map_border;
+                                let c = cls.locate(s.p);
+                                cls.prefetch(c);
+                                located.push((i, c));
                             }
+                        }
+                        for &(i, c) in &located {
+                            let s = surf[i].as_ref().expect("located points have a hit");
+                            let lk = cls.classify_at(s.p, s.tri, c);
+                            o[i] = lk.decision;
+                            hi[i] = lk.hint;
+                            mb[i] = lk.map_border;
                         }
                     }
                 });
@@ -326,6 +339,38 @@ impl Shadowing<'_> {
             } else {
                 (0..n.div_ceil(w)).map(|_| &mut [][..]).collect()
             };
+            if !check {
+                // Only the undecided pixels, listed first (in order) and traced in fixed
+                // chunks: counts add up in the same order for any thread count.
+                let list: Vec<u32> = und
+                    .par_iter()
+                    .enumerate()
+                    .filter(|&(i, &u)| u && occ[i] != NONE)
+                    .map(|(i, _)| i as u32)
+                    .collect();
+                let answers: Vec<(Vec<bool>, RayCounts)> = list
+                    .par_chunks(256)
+                    .map(|chunk| {
+                        let mut c = RayCounts::default();
+                        let blocked = chunk
+                            .iter()
+                            .map(|&i| {
+                                let s = surf[i as usize].as_ref().expect("classified pixels have a hit");
+                                let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
+                                r.tracer.occluded_with_hint(&ray, hint[i as usize], &mut c)
+                            })
+                            .collect();
+                        (blocked, c)
+                    })
+                    .collect();
+                for (chunk, (blocked, c)) in list.chunks(256).zip(answers) {
+                    for (&i, b) in chunk.iter().zip(blocked) {
+                        occ[i as usize] = if b { SHADOW } else { LIT };
+                    }
+                    total += c;
+                }
+                continue;
+            }
             let counts: Vec<RayCounts> = occ
                 .par_chunks_mut(w)
                 .zip(wrong_rows)

@@ -231,8 +231,10 @@ impl Renderer<'_> {
                     for x0 in (0..w).step_by(TILE) {
                         located.clear();
                         for y in 0..rows {
-                            for i in y * w + x0..y * w + (x0 + TILE).min(w) {
-                                let Some(s) = &surf[i] else { continue };
+                            let first = y * w + x0;
+                            let run = &surf[first..y * w + (x0 + TILE).min(w)];
+                            for (i, s) in (first..).zip(run) {
+                                let Some(s) = s else { continue };
                                 if facing(s, light).is_none() {
                                     continue;
                                 }

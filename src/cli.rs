@@ -90,7 +90,7 @@ pub struct Knobs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub shadow_map_res: Option<u32>,
     /// Depth margin of map decisions, in texel footprints.
-    #[arg(long, value_name = "B")]
+    #[arg(long, value_name = "B", allow_negative_numbers = true)]
     pub bias: Option<f32>,
     /// SMeRTS border detection: screen-space Laplacian, map-space texel disagreement, or both.
     #[arg(long, value_enum)]
@@ -100,7 +100,7 @@ pub struct Knobs {
     pub dilate: Option<u32>,
     /// Paraboloid maps: tessellate triangles until projected edges are at most T texels
     /// (`inf`: no tessellation).
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub tess: Option<f32>,
     /// Shadows at mirror hits: from the `maps` (map-space border test) or by `rays`.
     #[arg(long, value_enum)]

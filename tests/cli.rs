@@ -265,3 +265,75 @@ fn raster_visibility_from_the_cli() {
         hyrt(&["render", "cornell", "--visibility", "zbuffer", "-o", d.join("x.png").to_str().unwrap()]);
     assert!(!ok && err.contains("possible values: rays, raster"), "{err}");
 }
+
+/// `--preset hybrid` selects raster visibility and SMeRTS, explicit flags override it, the
+/// stats carry the per-light decisions and the new passes, and bad knob values are refused.
+#[test]
+fn smerts_presets_and_knobs_from_the_cli() {
+    let d = out_dir("smerts_cli");
+    let (stats, png) = (d.join("s.json"), d.join("c.png"));
+    let run = |extra: &[&str]| {
+        let mut args = vec!["render", "cornell", "--size", "64x48", "-q", "--preset", "hybrid"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", png.to_str().unwrap(), "--stats", stats.to_str().unwrap()]);
+        let (ok, _, err) = hyrt(&args);
+        assert!(ok, "{err}");
+        serde_json::from_slice::<serde_json::Value>(&read(&stats)).unwrap()
+    };
+    let v = run(&["--check-visibility"]);
+    assert_eq!(
+        (v["options"]["visibility"].as_str(), v["options"]["shadows"].as_str()),
+        (Some("raster"), Some("smerts"))
+    );
+    assert_eq!(v["rays"]["primary"], 0);
+    let lights = v["shadow_lights"].as_array().unwrap();
+    assert_eq!(lights.len(), 2);
+    for l in lights {
+        assert!(l["lit"].as_u64().unwrap() > 0 && l["wrong"].as_u64().is_some(), "{l}");
+    }
+    assert_eq!(v["maps_built"], 2);
+    for k in ["surface", "map_build", "classify", "borders", "shadow_rays", "direct"] {
+        assert!(v["time_ms"][k].as_f64().is_some(), "time_ms.{k} missing");
+    }
+    let r = &v["rays"];
+    assert_eq!(
+        r["shadow"].as_u64().unwrap(),
+        r["shadow_hint_hits"].as_u64().unwrap() + r["shadow_traversals"].as_u64().unwrap()
+    );
+
+    // Explicit flags override the preset, one knob each.
+    let v = run(&["--shadows", "rays"]);
+    assert_eq!(
+        (v["options"]["visibility"].as_str(), v["options"]["shadows"].as_str()),
+        (Some("raster"), Some("rays"))
+    );
+    assert!(v["shadow_lights"].as_array().unwrap().is_empty());
+    let v = run(&[
+        "--shadow-map",
+        "paraboloid",
+        "--shadow-map-res",
+        "256",
+        "--bias",
+        "2",
+        "--borders",
+        "both",
+        "--dilate",
+        "2",
+        "--tess",
+        "inf",
+        "--mirror-shadows",
+        "rays",
+    ]);
+    let o = &v["options"];
+    assert_eq!(o["shadow_map"], "paraboloid");
+    assert_eq!(o["shadow_map_res"], 256);
+    assert_eq!(o["bias"], 2.0);
+    assert_eq!((o["borders"].as_str(), o["dilate"].as_u64()), (Some("both"), Some(2)));
+    assert_eq!((o["tess"].as_str(), o["mirror_shadows"].as_str()), (Some("inf"), Some("rays")));
+    assert!(v["shadow_lights"][0]["faces_drawn"].as_u64().unwrap() <= 2);
+
+    assert_fails(&d, &["--preset", "hybrid", "--bias", "-1"], &["--bias must be a finite number >= 0"]);
+    assert_fails(&d, &["--preset", "hybrid", "--tess", "0"], &["--tess must be > 0"]);
+    assert_fails(&d, &["--shadow-map-res", "0"], &["--shadow-map-res"]);
+    assert_fails(&d, &["--borders", "edges"], &["possible values: laplacian, depth, both"]);
+}

@@ -72,6 +72,8 @@ pub struct LightStats {
     pub undecided: u64,
     /// Map faces drawn for this light (cube: of 6, paraboloid: of 2).
     pub faces_drawn: u32,
+    /// Memory of the light's map (ids and distances), in bytes.
+    pub map_bytes: u64,
     /// With `Options::check_visibility`: map decisions that a shadow ray contradicts.
     pub wrong: Option<u64>,
 }
@@ -290,6 +292,7 @@ impl Renderer<'_> {
             .map(|((o, u), m)| {
                 let mut s = LightStats {
                     faces_drawn: m.faces_drawn().iter().filter(|&&f| f).count() as u32,
+                    map_bytes: m.memory_bytes() as u64,
                     ..LightStats::default()
                 };
                 for (i, &v) in o.iter().enumerate() {

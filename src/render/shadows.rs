@@ -96,6 +96,13 @@ pub struct ShadowBuffers {
     pub wrong: Vec<Vec<bool>>,
     /// The shading points of the camera hits.
     pub(crate) surf: Vec<Option<SurfaceHit>>,
+    /// Per pixel the shading point's position and triangle (`EMPTY` without one): the 16 bytes
+    /// classification reads, once per light (the whole shading point is 72).
+    points: Vec<(Vec3, u32)>,
+    /// Per pixel, bit `l % 8` of byte `l / 8` of its `stride` bytes: whether light `l` faces
+    /// the shading point (see [`facing`]). Pixel-major, so that one pass over the shading points
+    /// serves every light.
+    faces: Vec<u8>,
 }
 
 /// Resizes `v` to `n` buffers of `len` elements equal to `fill`, reusing their memory.
@@ -128,32 +135,25 @@ impl Renderer<'_> {
 
     /// The light maps covering every face that a camera hit of `gbuffer` falls on, built (or
     /// extended) if the cache lacks a face. Returns the maps and how many were (re)built.
-    fn light_maps(&self, surf: &[Option<SurfaceHit>]) -> (Vec<Arc<LightMap>>, u32) {
+    fn light_maps(&self, points: &[(Vec3, u32)], faces: &[u8]) -> (Vec<Arc<LightMap>>, u32) {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
         let lights = &self.scene.lights;
         // Faces needed: per light, any hit the light faces whose direction falls on the face.
-        let w = self.scene.settings.width as usize;
+        let stride = lights.len().div_ceil(8).max(1);
         let needed = self.maps.needed.get_or_init(|| {
-            surf.par_chunks(w.max(1))
-                .fold(
-                    || vec![false; lights.len() * nf],
-                    |mut acc, row| {
-                        for s in row.iter().flatten() {
-                            for (l, light) in lights.iter().enumerate() {
-                                if facing(s, light).is_some() {
-                                    acc[l * nf + LightMap::face_of(kind, s.p - light.position) as usize] =
-                                        true;
-                                }
-                            }
-                        }
-                        acc
-                    },
-                )
-                .reduce(
-                    || vec![false; lights.len() * nf],
-                    |a, b| a.iter().zip(&b).map(|(x, y)| *x | *y).collect(),
-                )
+            lights
+                .par_iter()
+                .enumerate()
+                .flat_map_iter(|(l, light)| {
+                    let mut need = vec![false; nf];
+                    let lit = faces.chunks(stride).map(|b| b[l / 8] >> (l % 8) & 1 != 0);
+                    for (&(p, _), _) in points.iter().zip(lit).filter(|(_, f)| *f) {
+                        need[LightMap::face_of(kind, p - light.position) as usize] = true;
+                    }
+                    need
+                })
+                .collect()
         });
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
         cache.resize(lights.len(), None);
@@ -195,10 +195,26 @@ impl Renderer<'_> {
                     .map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x, y).dir))
             })
             .collect_into_vec(&mut bufs.surf);
+        bufs.surf
+            .par_iter()
+            .map(|s| s.as_ref().map_or((Vec3::ZERO, EMPTY), |s| (s.p, s.tri)))
+            .collect_into_vec(&mut bufs.points);
+        let lights = &self.scene.lights;
+        let stride = nl.div_ceil(8).max(1);
+        bufs.faces.clear();
+        bufs.faces.resize(n * stride, 0);
+        bufs.faces.par_chunks_mut(stride).zip(&bufs.surf).for_each(|(bits, s)| {
+            let Some(s) = s else { return };
+            for (l, light) in lights.iter().enumerate() {
+                if facing(s, light).is_some() {
+                    bits[l / 8] |= 1 << (l % 8);
+                }
+            }
+        });
         stats.time_ms.insert("surface", ms(t));
 
         let t = Instant::now();
-        let (maps, built) = self.light_maps(&bufs.surf);
+        let (maps, built) = self.light_maps(&bufs.points, &bufs.faces);
         stats.time_ms.insert("map_build", ms(t));
         stats.maps_built = built;
 
@@ -213,41 +229,34 @@ impl Renderer<'_> {
         // strips across the map).
         const TILE: usize = 8;
         let band = (TILE * w).max(1);
-        for ((light, map), ((occ, hint), mb)) in self
-            .scene
-            .lights
-            .iter()
-            .zip(&maps)
-            .zip(bufs.occ.iter_mut().zip(&mut bufs.hint).zip(&mut bufs.map_border))
+        let stride = nl.div_ceil(8).max(1);
+        for (l, (map, ((occ, hint), mb))) in
+            maps.iter().zip(bufs.occ.iter_mut().zip(&mut bufs.hint).zip(&mut bufs.map_border)).enumerate()
         {
             let cls = Classifier { map, planes, bias };
+            let (byte, bit) = (l / 8, 1u8 << (l % 8));
             occ.par_chunks_mut(band)
                 .zip(hint.par_chunks_mut(band))
                 .zip(mb.par_chunks_mut(band))
-                .zip(bufs.surf.par_chunks(band))
-                .for_each(|(((o, hi), mb), surf)| {
-                    let rows = surf.len() / w.max(1);
+                .zip(bufs.points.par_chunks(band).zip(bufs.faces.par_chunks(band * stride)))
+                .for_each(|(((o, hi), mb), (points, faces))| {
+                    let rows = points.len() / w.max(1);
                     // Per tile, first locate every point and prefetch its texels, then decide:
                     // the tile's cache misses overlap.
                     let mut located = Vec::with_capacity(TILE * TILE);
                     for x0 in (0..w).step_by(TILE) {
                         located.clear();
                         for y in 0..rows {
-                            let first = y * w + x0;
-                            let run = &surf[first..y * w + (x0 + TILE).min(w)];
-                            for (i, s) in (first..).zip(run) {
-                                let Some(s) = s else { continue };
-                                if facing(s, light).is_none() {
-                                    continue;
-                                }
-                                let c = cls.locate(s.p);
+                            let (first, last) = (y * w + x0, y * w + (x0 + TILE).min(w));
+                            for i in (first..last).filter(|&i| faces[i * stride + byte] & bit != 0) {
+                                let c = cls.locate(points[i].0);
                                 cls.prefetch(c);
                                 located.push((i, c));
                             }
                         }
                         for &(i, c) in &located {
-                            let s = surf[i].as_ref().expect("located points have a hit");
-                            let lk = cls.classify_at(s.p, s.tri, c);
+                            let (p, tri) = points[i];
+                            let lk = cls.classify_at(p, tri, c);
                             o[i] = lk.decision;
                             hi[i] = lk.hint;
                             mb[i] = lk.map_border;

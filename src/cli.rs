@@ -12,7 +12,7 @@ use hyrt_shadowmap::MapKind;
 use crate::{
     film::atomic_write,
     metrics,
-    render::{Borders, MirrorShadows, Options, Renderer, Shadows, Visibility},
+    render::{Borders, Indirect, MirrorShadows, Options, Renderer, Shadows, Visibility},
     scene,
     stats::RenderStats,
 };
@@ -105,6 +105,29 @@ pub struct Knobs {
     /// Shadows at mirror hits: from the `maps` (map-space border test) or by `rays`.
     #[arg(long, value_enum)]
     pub mirror_shadows: Option<MirrorArg>,
+    /// Indirect light from virtual point lights: `none`, `rays` (one shadow ray per hit and
+    /// VPL) or `maps` (one paraboloid map per VPL). `--vpls` alone picks `rays` under the
+    /// reference preset and `maps` under the hybrid one.
+    #[arg(long, value_enum)]
+    pub indirect: Option<IndirectArg>,
+    /// Number of VPL light paths (thesis: 45), over all lights.
+    #[arg(long, value_name = "N")]
+    pub vpls: Option<u32>,
+    /// Diffuse bounces per VPL path (each leaves a VPL).
+    #[arg(long, value_name = "B")]
+    pub vpl_bounces: Option<u32>,
+    /// Offset into the VPLs' Halton sequence.
+    #[arg(long, value_name = "S")]
+    pub vpl_seed: Option<u32>,
+    /// VPL distance clamp `d_min`, as a fraction of the scene's bounding-box diagonal.
+    #[arg(long, value_name = "F", allow_negative_numbers = true)]
+    pub vpl_clamp: Option<f32>,
+    /// Depth margin of VPL map lookups, in texel footprints.
+    #[arg(long, value_name = "B", allow_negative_numbers = true)]
+    pub vpl_bias: Option<f32>,
+    /// Resolution of each VPL's paraboloid map.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub vpl_map_res: Option<u32>,
     /// Also cast a shadow ray for every map decision and count those it contradicts
     /// (wrong-visibility pixels, in the stats; these rays are not counted as frame rays).
     #[arg(long)]
@@ -169,6 +192,39 @@ impl Knobs {
                 MirrorArg::Rays => MirrorShadows::Rays,
             };
         }
+        let io = &mut o.indirect_opts;
+        if let Some(n) = self.vpls {
+            io.vpl.paths = n;
+        }
+        if let Some(b) = self.vpl_bounces {
+            io.vpl.bounces = b;
+        }
+        if let Some(sd) = self.vpl_seed {
+            io.vpl.seed = sd;
+        }
+        if let Some(c) = self.vpl_clamp {
+            if !(c >= 0.0 && c.is_finite()) {
+                bail!("--vpl-clamp must be a finite number >= 0, got {c}");
+            }
+            io.clamp = c;
+        }
+        if let Some(n) = self.vpl_map_res {
+            io.map.resolution = n;
+        }
+        if let Some(b) = self.vpl_bias {
+            if !(b >= 0.0 && b.is_finite()) {
+                bail!("--vpl-bias must be a finite number >= 0, got {b}");
+            }
+            io.bias = b;
+        }
+        o.indirect = match (self.indirect, self.vpls) {
+            (Some(IndirectArg::None), _) => Indirect::None,
+            (Some(IndirectArg::Rays), _) => Indirect::Rays,
+            (Some(IndirectArg::Maps), _) => Indirect::Maps,
+            (None, Some(_)) if self.preset == Some(PresetArg::Hybrid) => Indirect::Maps,
+            (None, Some(_)) => Indirect::Rays,
+            (None, None) => Indirect::None,
+        };
         o.check_visibility = self.check_visibility;
         Ok(o)
     }
@@ -187,7 +243,13 @@ pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
         "dilate": sh.dilate,
         "tess": if sh.map.tess_texels.is_finite() { serde_json::json!(sh.map.tess_texels) } else { serde_json::json!("inf") },
         "mirror_shadows": match sh.mirror { MirrorShadows::Maps => "maps", MirrorShadows::Rays => "rays" },
-        "indirect": "none",
+        "indirect": o.indirect.name(),
+        "vpls": o.indirect_opts.vpl.paths,
+        "vpl_bounces": o.indirect_opts.vpl.bounces,
+        "vpl_seed": o.indirect_opts.vpl.seed,
+        "vpl_clamp": o.indirect_opts.clamp,
+        "vpl_map_res": o.indirect_opts.map.resolution,
+        "vpl_bias": o.indirect_opts.bias,
         "max_depth": max_depth,
     })
 }
@@ -222,6 +284,13 @@ pub enum BordersArg {
     Laplacian,
     Depth,
     Both,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum IndirectArg {
+    None,
+    Rays,
+    Maps,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -323,11 +392,13 @@ fn render(a: &RenderArgs) -> Result<()> {
     let r = &frame.stats.rays;
     let times: Vec<String> = frame.stats.time_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
     say(format!(
-        "rays: primary {} shadow {} (hint hits {}) specular {} total {}\ntime ms: {}",
+        "rays: primary {} shadow {} (hint hits {}) specular {} vpl_shadow {} vpl_path {} total {}\ntime ms: {}",
         r.primary,
         r.shadow,
         r.shadow_hint_hits,
         r.specular,
+        r.vpl_shadow,
+        r.vpl_path,
         r.total(),
         times.join(", ")
     ));

@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 use crate::{
-    render::{Options, Shadows, Visibility},
+    render::{Indirect, Options, Shadows, Visibility},
     scene::Scene,
 };
 
@@ -105,7 +105,32 @@ impl Plan {
                 format!("mirror materials [{names}], up to {} bounce(s)", scene.settings.max_depth),
             );
         }
-        plan.add(false, "indirect", "no indirect-light settings (VPLs) requested".into());
+        let io = &opts.indirect_opts;
+        match opts.indirect {
+            Indirect::None => plan.add(false, "indirect", "no indirect-light settings (VPLs) requested".into()),
+            _ if lights == 0 => plan.add(false, "indirect", "no point lights to place VPLs from".into()),
+            _ if io.vpl.paths == 0 || io.vpl.bounces == 0 => {
+                plan.add(false, "indirect", "0 VPL paths or bounces requested".into())
+            }
+            Indirect::Rays => plan.add(
+                true,
+                "indirect",
+                format!(
+                    "{} VPL path(s), {} bounce(s), visibility by one shadow ray per hit and VPL",
+                    io.vpl.paths, io.vpl.bounces
+                ),
+            ),
+            Indirect::Maps => plan.add(
+                true,
+                "indirect",
+                format!(
+                    "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map per VPL (built once)",
+                    io.vpl.paths,
+                    io.vpl.bounces,
+                    n = io.map.resolution
+                ),
+            ),
+        }
         plan
     }
 

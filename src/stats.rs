@@ -26,6 +26,9 @@ pub struct RenderStats<'a> {
     pub shadow_lights: Vec<crate::render::shadows::LightStats>,
     /// Light maps built for this frame (0: all cached).
     pub maps_built: u32,
+    /// With indirect light: the VPLs and the memory of their maps.
+    pub vpls: u32,
+    pub vpl_map_bytes: u64,
     /// Milliseconds: `total` (BVH build + frame), `frame`, `bvh_build` and one entry per pass.
     pub time_ms: serde_json::Map<String, serde_json::Value>,
 }
@@ -62,6 +65,8 @@ impl<'a> RenderStats<'a> {
             plan_detail: plan,
             shadow_lights: frame.lights.clone(),
             maps_built: frame.maps_built,
+            vpls: frame.vpls,
+            vpl_map_bytes: frame.vpl_map_bytes,
             rays: serde_json::json!({
                 "primary": r.primary,
                 "shadow": r.shadow,
@@ -69,6 +74,7 @@ impl<'a> RenderStats<'a> {
                 "shadow_traversals": r.shadow_traversals(),
                 "specular": r.specular,
                 "vpl_shadow": r.vpl_shadow,
+                "vpl_path": r.vpl_path,
                 "total": r.total(),
             }),
             time_ms,

@@ -61,8 +61,10 @@ fn stats_json_has_plan_rays_and_times() {
     assert_eq!(v["triangles"], 32);
     assert_eq!(v["rays"]["primary"], 64 * 48);
     let r = &v["rays"];
-    let sum: u64 =
-        ["primary", "shadow", "specular", "vpl_shadow"].iter().map(|k| r[k].as_u64().unwrap()).sum();
+    let sum: u64 = ["primary", "shadow", "specular", "vpl_shadow", "vpl_path"]
+        .iter()
+        .map(|k| r[k].as_u64().unwrap())
+        .sum();
     assert_eq!(r["total"].as_u64().unwrap(), sum);
     assert_eq!(r["vpl_shadow"], 0);
     let plan: Vec<&str> = v["plan"].as_array().unwrap().iter().map(|p| p.as_str().unwrap()).collect();

@@ -90,6 +90,10 @@ pub struct Lookup {
     pub hint: u32,
     /// Whether the 2x2 footprint disagrees (or leaves the face): a map-space border.
     pub map_border: bool,
+    /// Whether the texel's occluder lies within the bias band of the point (the decision is
+    /// then [`SHADOW`] and `map_border` is set): a neighbouring triangle's plane past a crease,
+    /// or a contact shadow. Lookups without rays may prefer to call it lit.
+    pub ambiguous: bool,
     /// Face and texel of the decision (for inspection).
     pub face: u8,
     pub texel: [u32; 2],
@@ -145,6 +149,32 @@ impl Classifier<'_> {
         let _ = c;
     }
 
+    /// Visibility from the texel under `p` alone, ambiguous occluders counted as the point's own
+    /// surface: for lookups that no ray will check (VPL maps, where each VPL's share of the
+    /// light is small and aliasing is diluted). Cheaper than [`Classifier::classify`]: no
+    /// footprint, usually one texel load and no arithmetic.
+    #[inline]
+    pub fn visible(&self, p: Vec3, own: u32) -> bool {
+        let map = self.map;
+        let light = map.light();
+        let v = p - light;
+        let c = map.coord(v);
+        let last = map.resolution().saturating_sub(1);
+        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
+        let id = map.face_ids(c.face).get(map.texel_index(ix, iy)).copied().unwrap_or(EMPTY);
+        if id == EMPTY || id == own {
+            return true;
+        }
+        let r = v.length();
+        let dir = v / r;
+        let pl = self.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
+        let n = pl.truncate();
+        let cos = n.dot(dir);
+        let t = if cos.abs() >= 1e-6 { (pl.w - n.dot(light)) / cos } else { map.depth(c.face, ix, iy) };
+        let margin = self.bias * map.texel_angle(c) * r + TOLERANCE * (r + p.abs().max_element());
+        !(t > SHADOW_EPSILON * r && t < r - margin)
+    }
+
     /// [`Classifier::classify`] with `p`'s location `c` from [`Classifier::locate`].
     #[inline]
     pub fn classify_at(&self, p: Vec3, own: u32, c: MapCoord) -> Lookup {
@@ -172,7 +202,14 @@ impl Classifier<'_> {
         // Most points see only their own triangle (or nothing) all around: lit, no border, and
         // no arithmetic. This is the rule below with every texel deciding `LIT`.
         if in_domain && foot_ids.iter().all(|&id| id == own || id == EMPTY) {
-            return Lookup { decision: LIT, hint: EMPTY, map_border: false, face: c.face, texel };
+            return Lookup {
+                decision: LIT,
+                hint: EMPTY,
+                map_border: false,
+                ambiguous: false,
+                face: c.face,
+                texel,
+            };
         }
 
         let r = v.length();
@@ -222,6 +259,6 @@ impl Classifier<'_> {
                 }
             }
         }
-        Lookup { decision, hint, map_border, face: c.face, texel }
+        Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, face: c.face, texel }
     }
 }

@@ -15,10 +15,12 @@
 
 pub mod cull;
 pub mod direct;
+pub mod indirect;
 pub mod shadows;
 pub mod specular;
 pub mod surface;
 pub mod visibility;
+pub mod vpl;
 
 use std::{collections::BTreeMap, time::Instant};
 
@@ -105,8 +107,23 @@ impl Default for ShadowOptions {
 /// How indirect light is computed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Indirect {
+    /// No indirect light.
     #[default]
     None,
+    /// VPLs, visibility by one shadow ray per hit and VPL (the reference).
+    Rays,
+    /// VPLs, visibility by one paraboloid map per VPL (lookups only).
+    Maps,
+}
+
+impl Indirect {
+    pub fn name(self) -> &'static str {
+        match self {
+            Indirect::None => "none",
+            Indirect::Rays => "rays",
+            Indirect::Maps => "maps",
+        }
+    }
 }
 
 impl Visibility {
@@ -145,6 +162,8 @@ pub struct Options {
     pub shadows: Shadows,
     pub shadow: ShadowOptions,
     pub indirect: Indirect,
+    /// VPL count, bounces, seed, clamp and map knobs (used unless `indirect` is `None`).
+    pub indirect_opts: indirect::IndirectOptions,
     /// Diagnostics: for every camera hit and light decided by a map, also cast a shadow ray
     /// (not counted in the frame's rays) and count the decisions it contradicts
     /// (`FrameStats::lights[l].wrong`).
@@ -174,6 +193,9 @@ pub struct FrameStats {
     pub maps_built: u32,
     /// Per light: map decisions and borders (map-based shadows only).
     pub lights: Vec<shadows::LightStats>,
+    /// With indirect light: the number of VPLs and the memory of their maps.
+    pub vpls: u32,
+    pub vpl_map_bytes: u64,
     /// Milliseconds per pass, plus `total` for the frame (scene preparation excluded).
     pub time_ms: BTreeMap<&'static str, f64>,
 }
@@ -203,6 +225,8 @@ pub struct Renderer<'a> {
     raster: std::sync::Mutex<visibility::RasterScratch>,
     /// Light maps, built on first use and kept while the scene is unchanged.
     maps: shadows::MapCache,
+    /// VPLs and their maps, likewise.
+    vpl_cache: indirect::VplCache,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -220,8 +244,8 @@ impl<'a> Renderer<'a> {
             Visibility::Raster => cull::Clusters::new(&scene.positions),
             Visibility::Rays => cull::Clusters::default(),
         };
-        let (raster, maps) = Default::default();
-        Self { scene, tracer, plan, options, camera, raster_near, clusters, raster, maps }
+        let (raster, maps, vpl_cache) = Default::default();
+        Self { scene, tracer, plan, options, camera, raster_near, clusters, raster, maps, vpl_cache }
     }
 
     /// Wall time of the BVH build, in milliseconds.
@@ -231,7 +255,7 @@ impl<'a> Renderer<'a> {
 
     /// Number of pixel passes that report progress (rows each).
     pub fn progress_passes(&self) -> u32 {
-        ["visibility", "direct", "specular"].iter().filter(|p| self.plan.runs(p)).count() as u32
+        ["visibility", "direct", "indirect", "specular"].iter().filter(|p| self.plan.runs(p)).count() as u32
     }
 
     /// The camera ray through the centre of pixel `(x, y)`.
@@ -274,15 +298,24 @@ impl<'a> Renderer<'a> {
             stats.time_ms.insert("direct", ms(t));
         }
 
+        let mut indirect = vec![Vec3::ZERO; n];
+        let vpls = self.plan.runs("indirect").then(|| self.vpls(&mut stats));
+        if let Some(v) = &vpls {
+            let t = Instant::now();
+            stats.rays += indirect::run(self, v, &gbuffer, &mut indirect, progress);
+            stats.time_ms.insert("indirect", ms(t));
+        }
+
         let mut spec = vec![Vec3::ZERO; n];
         if self.plan.runs("specular") {
             let t = Instant::now();
-            stats.rays += specular::run(self, &gbuffer, shadowing.as_ref(), &mut spec, progress);
+            stats.rays +=
+                specular::run(self, &gbuffer, shadowing.as_ref(), vpls.as_ref(), &mut spec, progress);
             stats.time_ms.insert("specular", ms(t));
         }
 
         let mut film = Film::new(w, h);
-        film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + spec[i]);
+        film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + indirect[i] + spec[i]);
         stats.time_ms.insert("total", ms(start));
         let shadows = shadowing.map(|s| s.bufs).and_then(|b| {
             if self.options.keep_buffers {

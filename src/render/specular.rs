@@ -3,7 +3,7 @@
 use glam::Vec3;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray};
 
-use super::{Progress, Renderer, SurfaceHit, direct, shade_hits_where, shadows::Shadowing};
+use super::{Progress, Renderer, SurfaceHit, direct, indirect::Vpls, shade_hits_where, shadows::Shadowing};
 
 /// Adds the mirror-reflected light of every camera hit on a specular material; the surfaces
 /// the mirror paths meet decide shadows with `shadowing`'s maps when given (see
@@ -12,22 +12,25 @@ pub fn run(
     r: &Renderer,
     gbuffer: &[Option<Hit>],
     shadowing: Option<&Shadowing>,
+    vpls: Option<&Vpls>,
     out: &mut [Vec3],
     progress: Progress,
 ) -> RayCounts {
     // Only hits on mirror materials start a path: skip the others before building their
     // shading point (most of the pass's time otherwise, on scenes with few mirrors).
     let mirror = |h: &Hit| r.scene.materials[r.scene.material[h.tri as usize] as usize].ks != Vec3::ZERO;
-    shade_hits_where(r, gbuffer, out, progress, mirror, |_, hit, c| reflected(r, hit, shadowing, c))
+    shade_hits_where(r, gbuffer, out, progress, mirror, |_, hit, c| reflected(r, hit, shadowing, vpls, c))
 }
 
 /// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces;
 /// each reflection is weighted by the product of `Ks` so far, and each surface it meets is
-/// shaded with direct light (and its own reflection, while depth remains).
+/// shaded with direct light, indirect light from the VPLs when given, and its own reflection,
+/// while depth remains.
 pub fn reflected(
     r: &Renderer,
     first: &SurfaceHit,
     shadowing: Option<&Shadowing>,
+    vpls: Option<&Vpls>,
     counts: &mut RayCounts,
 ) -> Vec3 {
     let mut sum = Vec3::ZERO;
@@ -51,6 +54,9 @@ pub fn reflected(
         };
         hit = SurfaceHit::new(r.scene, &h, ray.dir);
         sum += weight * direct::shade_point(r, &hit, shadowing, counts);
+        if let Some(v) = vpls {
+            sum += weight * v.at(r, &hit, counts);
+        }
     }
     sum
 }

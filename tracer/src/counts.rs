@@ -18,6 +18,8 @@ pub enum RayKind {
     Specular,
     /// Visibility rays towards virtual point lights.
     VplShadow,
+    /// Light paths that place virtual point lights.
+    VplPath,
 }
 
 /// Number of rays cast, by kind.
@@ -27,6 +29,7 @@ pub struct RayCounts {
     pub shadow: u64,
     pub specular: u64,
     pub vpl_shadow: u64,
+    pub vpl_path: u64,
     /// Of the `shadow` rays, those answered by their occluder hint (one triangle test, no
     /// traversal; see [`crate::Tracer::occluded_with_hint`]). The others traversed the BVH.
     pub shadow_hint_hits: u64,
@@ -40,11 +43,12 @@ impl RayCounts {
             RayKind::Shadow => self.shadow += n,
             RayKind::Specular => self.specular += n,
             RayKind::VplShadow => self.vpl_shadow += n,
+            RayKind::VplPath => self.vpl_path += n,
         }
     }
 
     pub fn total(&self) -> u64 {
-        self.primary + self.shadow + self.specular + self.vpl_shadow
+        self.primary + self.shadow + self.specular + self.vpl_shadow + self.vpl_path
     }
 
     /// Shadow rays that traversed the BVH (those not answered by a hint).
@@ -59,6 +63,7 @@ impl AddAssign for RayCounts {
         self.shadow += o.shadow;
         self.specular += o.specular;
         self.vpl_shadow += o.vpl_shadow;
+        self.vpl_path += o.vpl_path;
         self.shadow_hint_hits += o.shadow_hint_hits;
     }
 }

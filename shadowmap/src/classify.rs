@@ -155,10 +155,15 @@ impl Classifier<'_> {
     /// footprint, usually one texel load and no arithmetic.
     #[inline]
     pub fn visible(&self, p: Vec3, own: u32) -> bool {
+        self.visible_at(p, own, self.locate(p))
+    }
+
+    /// [`Classifier::visible`] with `p`'s location `c` from [`Classifier::locate`].
+    #[inline]
+    pub fn visible_at(&self, p: Vec3, own: u32, c: MapCoord) -> bool {
         let map = self.map;
         let light = map.light();
         let v = p - light;
-        let c = map.coord(v);
         let last = map.resolution().saturating_sub(1);
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
         let id = map.face_ids(c.face).get(map.texel_index(ix, iy)).copied().unwrap_or(EMPTY);

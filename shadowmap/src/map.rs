@@ -418,7 +418,9 @@ impl LightMap {
     /// of the domain: the nearest one (by distance to its square) if the point's own is not.
     fn clamp_to_domain(&self, x: f64, y: f64) -> (f32, f32) {
         let res = self.resolution;
-        let lim = (res as f32).next_down();
+        // The largest f32 below `res` (`res` is at most 2^16, exact in f32): `next_down`
+        // without its special cases.
+        let lim = f32::from_bits((res as f32).to_bits() - 1);
         // `max` before `min` and NaN -> 0: f32::max returns the non-NaN operand.
         let (x, y) = ((x as f32).max(0.0).min(lim), (y as f32).max(0.0).min(lim));
         if self.layout == Layout::Cube {

@@ -5,8 +5,9 @@
 //! (medians of `HYRT_BENCH_FRAMES`, default 5, after a warm-up frame that builds the maps):
 //! - `vpl rays`: the reference with indirect light, one shadow ray per hit and VPL;
 //! - `vpl maps`: the same with one paraboloid map per VPL;
-//! - `hybrid`: rasterized visibility + SMeRTS + VPL maps;
-//! and prints the indirect pass time, the frame time, VPL shadow rays, PSNR against `vpl rays`,
+//! - `hybrid`: rasterized visibility + SMeRTS + VPL maps.
+//!
+//! It prints the indirect pass time, the frame time, VPL shadow rays, PSNR against `vpl rays`,
 //! and the VPL map build time and memory.
 
 mod common;

@@ -135,6 +135,20 @@ pub struct Knobs {
 }
 
 impl Knobs {
+    /// The options these flags select for `scene`: a scene with an `[indirect]` table gets its
+    /// VPL settings and indirect light (by rays under the reference preset, by maps under the
+    /// hybrid one) unless `--indirect` says otherwise; flags override the scene's values.
+    pub fn options_for(&self, scene: &scene::Scene) -> Result<Options> {
+        let mut k = self.clone();
+        if let Some(ind) = scene.indirect {
+            k.vpls = k.vpls.or(Some(ind.vpls));
+            k.vpl_bounces = k.vpl_bounces.or(Some(ind.bounces));
+            k.vpl_seed = k.vpl_seed.or(Some(ind.seed));
+            k.vpl_clamp = k.vpl_clamp.or(ind.clamp);
+        }
+        k.options()
+    }
+
     /// The options these flags select.
     pub fn options(&self) -> Result<Options> {
         let mut o = match self.preset.unwrap_or(PresetArg::Reference) {
@@ -360,7 +374,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         check_writable(p)?;
     }
 
-    let options = a.knobs.options()?;
+    let options = a.knobs.options_for(&scene)?;
     let renderer = Renderer::new(&scene, options);
     say(format!(
         "{}: {} triangles, {} lights, {}x{}, {} threads; BVH {:.1} ms\nplan:\n{}",

@@ -339,3 +339,48 @@ fn smerts_presets_and_knobs_from_the_cli() {
     assert_fails(&d, &["--shadow-map-res", "0"], &["--shadow-map-res"]);
     assert_fails(&d, &["--borders", "edges"], &["possible values: laplacian, depth, both"]);
 }
+
+/// A scene file's `[indirect]` table asks for VPLs: they are simulated (rays under the reference
+/// preset, maps under the hybrid one) with the file's values, flags override them, and
+/// `--indirect none` turns them off; a bad clamp names the file and line.
+#[test]
+fn scene_file_indirect_table_asks_for_vpls() {
+    let d = out_dir("indirect_cli");
+    let w = |name: &str, text: &str| fs::write(d.join(name), text).unwrap();
+    // A floor and a wall, a light between them.
+    w(
+        "room.obj",
+        "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nv -2 0 -2\nv 2 0 -2\nv 2 3 -2\nv -2 3 -2\nf 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\n",
+    );
+    let scene = format!(
+        "{CAMERA}\n[indirect]\nvpls = 12\nbounces = 2\nclamp = 0.02\n\n[[mesh]]\npath = \"room.obj\"\n\n[[light]]\nposition = [0.0, 1.0, 0.0]\nintensity = 2.0\n"
+    );
+    w("room.toml", &scene);
+    let (stats, png) = (d.join("s.json"), d.join("r.png"));
+    let run = |extra: &[&str]| {
+        let mut args = vec!["render", "room.toml", "--size", "32x24", "-q"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", png.to_str().unwrap(), "--stats", stats.to_str().unwrap()]);
+        let (ok, _, err) = hyrt_in(&d, &args);
+        assert!(ok, "{err}");
+        serde_json::from_slice::<serde_json::Value>(&read(&stats)).unwrap()
+    };
+    let v = run(&[]);
+    assert_eq!(v["options"]["indirect"], "rays");
+    assert_eq!((v["options"]["vpls"].as_u64(), v["options"]["vpl_bounces"].as_u64()), (Some(12), Some(2)));
+    assert!((v["options"]["vpl_clamp"].as_f64().unwrap() - 0.02).abs() < 1e-6);
+    assert!(v["plan"].as_array().unwrap().iter().any(|p| p == "indirect"));
+    assert!(v["vpls"].as_u64().unwrap() > 0 && v["rays"]["vpl_shadow"].as_u64().unwrap() > 0);
+
+    let v = run(&["--preset", "hybrid", "--vpls", "20"]);
+    assert_eq!((v["options"]["indirect"].as_str(), v["options"]["vpls"].as_u64()), (Some("maps"), Some(20)));
+    assert_eq!(v["rays"]["vpl_shadow"], 0);
+    assert!(v["vpl_map_bytes"].as_u64().unwrap() > 0);
+
+    let v = run(&["--indirect", "none"]);
+    assert_eq!(v["options"]["indirect"], "none");
+    assert_eq!((v["vpls"].as_u64(), v["rays"]["vpl_path"].as_u64()), (Some(0), Some(0)));
+
+    w("bad_clamp.toml", &scene.replace("clamp = 0.02", "clamp = -1.0"));
+    assert_fails(&d, &["bad_clamp.toml"], &["bad_clamp.toml:", "clamp must be a finite number >= 0"]);
+}

@@ -20,6 +20,12 @@
 //! max_depth = 5                          # maximum number of mirror bounces
 //! exposure = 1.0
 //!
+//! [indirect]                             # optional: ask for indirect light (VPLs)
+//! vpls = 45                              # light paths over all lights (required)
+//! bounces = 1                            # optional, default 1
+//! seed = 0                               # optional, default 0
+//! clamp = 0.01                           # optional: d_min / scene diagonal
+//!
 //! [[mesh]]                               # one or more
 //! path = "../../shared/scenes/cornell-bunny-mirror/cornell-bunny-mirror.obj"   # relative to this file
 //! scale = 1.0                            # optional: number or [x, y, z]
@@ -48,6 +54,9 @@
 //!   vertical fov of 45 degrees; a light at the camera is then added only if the file has no
 //!   `[[light]]`. With a `[camera]` and no `[[light]]`, the scene has no lights.
 //! - `[settings]`: defaults are width 640, height 480, max_depth 5, exposure 1.0.
+//! - `[indirect]`: the scene is rendered with indirect light from `vpls` virtual point lights
+//!   (visibility by rays in the reference, by maps in the hybrid; see the CLI's `--indirect`).
+//!   Without it, only direct light. `clamp` must be a finite number `>= 0`.
 //! - `[[mesh]]`: `path` is relative to the scene file's directory (absolute paths work too).
 //!   Each mesh is transformed by `M = T * R * S`: first scaled (about the origin), then rotated,
 //!   then translated; normals use the inverse transpose of `M`, and a mirroring transform
@@ -85,6 +94,7 @@ struct SceneFile {
     name: Option<String>,
     camera: Option<Spanned<CameraSpec>>,
     settings: Option<SettingsSpec>,
+    indirect: Option<Spanned<IndirectSpec>>,
     #[serde(default)]
     mesh: Vec<Spanned<MeshSpec>>,
     #[serde(default)]
@@ -102,6 +112,15 @@ struct CameraSpec {
     up: Option<V3>,
     fov_y: f32,
     fov_x: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IndirectSpec {
+    vpls: u32,
+    bounces: Option<u32>,
+    seed: Option<u32>,
+    clamp: Option<f32>,
 }
 
 #[derive(Deserialize)]
@@ -295,6 +314,21 @@ pub fn load(path: &Path) -> Result<Scene> {
         d.height = s.height.unwrap_or(d.height);
         d.max_depth = s.max_depth.unwrap_or(d.max_depth);
         d.exposure = s.exposure.unwrap_or(d.exposure);
+    }
+
+    if let Some(ind) = &file.indirect {
+        if let Some(c) = ind.get_ref().clamp
+            && !(c >= 0.0 && c.is_finite())
+        {
+            bail!("{}: [indirect] clamp must be a finite number >= 0, got {c}", at(ind.span()));
+        }
+        let i = ind.get_ref();
+        scene.indirect = Some(super::IndirectSettings {
+            vpls: i.vpls,
+            bounces: i.bounces.unwrap_or(1),
+            seed: i.seed.unwrap_or(0),
+            clamp: i.clamp,
+        });
     }
 
     match camera {

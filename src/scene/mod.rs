@@ -112,8 +112,26 @@ pub struct Scene {
     pub lights: Vec<PointLight>,
     pub camera: Option<Camera>,
     pub settings: Settings,
+    /// Indirect light the scene asks for (VPLs); `None`: direct light only.
+    pub indirect: Option<IndirectSettings>,
     /// Where the scene came from (for messages); `None` for built-in scenes.
     pub source: Option<PathBuf>,
+}
+
+/// A scene's request for indirect light from virtual point lights: how many, and how they are
+/// placed and clamped. The renderer's configuration decides how their visibility is computed
+/// (rays for the reference, maps for the hybrid).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndirectSettings {
+    /// Light paths over all lights (thesis: 45).
+    pub vpls: u32,
+    /// Diffuse bounces per path, each leaving a VPL.
+    pub bounces: u32,
+    /// Offset into the Halton sequence.
+    pub seed: u32,
+    /// `d_min` as a fraction of the scene's bounding-box diagonal; `None`: the renderer's
+    /// default.
+    pub clamp: Option<f32>,
 }
 
 /// Geometry as a loader produces it, before it is placed in a scene.

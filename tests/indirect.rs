@@ -226,7 +226,10 @@ fn vpls_near_walls_and_on_the_paraboloid_rim() {
     );
     // A thin upright plate (a single quad, zero thickness) near the corner: VPLs on both sides
     // of it, and receivers in its shadow.
-    s.push_quad([vec3(-1.9, 0.0, -1.0), vec3(-0.5, 0.0, -1.0), vec3(-0.5, 0.6, -1.0), vec3(-1.9, 0.6, -1.0)], m);
+    s.push_quad(
+        [vec3(-1.9, 0.0, -1.0), vec3(-0.5, 0.0, -1.0), vec3(-0.5, 0.6, -1.0), vec3(-1.9, 0.6, -1.0)],
+        m,
+    );
     s.lights = vec![PointLight { position: vec3(-1.98, 0.02, -1.98), intensity: Vec3::splat(3.0) }];
     s.camera = Some(Camera::look_at(vec3(1.5, 2.2, 1.8), vec3(-1.0, 0.5, -1.0), Vec3::Y, 70.0));
     s.validate().unwrap();

@@ -145,17 +145,7 @@ fn vpl_maps_match_vpl_rays_on_conference() {
 fn light_that_reaches_no_visible_surface_adds_nothing() {
     let mut s = floor_scene(3.0, Vec3::splat(0.5), 4.0, 60.0, vec![], 48, 48);
     let m = s.add_material(Material::diffuse("box", Vec3::splat(0.8)));
-    let (lo, hi) = (vec3(-0.5, 0.5, -0.5), vec3(0.5, 1.5, 0.5));
-    let c = |i: u32| {
-        vec3(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    for q in [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]] {
-        s.push_quad(q.map(c), m);
-    }
+    push_box(&mut s, vec3(-0.5, 0.5, -0.5), vec3(0.5, 1.5, 0.5), m);
     s.lights = vec![PointLight { position: vec3(0.0, 1.0, 0.0), intensity: Vec3::splat(5.0) }];
     s.validate().unwrap();
     for ind in [Indirect::Rays, Indirect::Maps] {

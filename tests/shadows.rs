@@ -38,20 +38,6 @@ fn psnr(a: &Frame, b: &Frame, exposure: f32) -> f64 {
         .psnr_db
 }
 
-/// An axis-aligned closed box (12 triangles, outward faces).
-fn push_box(s: &mut Scene, lo: Vec3, hi: Vec3, m: u32) {
-    let c = |i: u32| {
-        vec3(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    for q in [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]] {
-        s.push_quad(q.map(c), m);
-    }
-}
-
 /// A floor of `n x n` quads (coplanar neighbours at every edge) of half-size `half` at y = 0.
 fn push_floor(s: &mut Scene, half: f32, n: u32, m: u32) {
     let step = 2.0 * half / n as f32;

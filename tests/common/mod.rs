@@ -79,3 +79,17 @@ pub fn hyrt_in(dir: &Path, args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stderr).into(),
     )
 }
+
+/// An axis-aligned closed box (12 triangles, outward faces).
+pub fn push_box(s: &mut Scene, lo: Vec3, hi: Vec3, m: u32) {
+    let c = |i: u32| {
+        vec3(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    for q in [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]] {
+        s.push_quad(q.map(c), m);
+    }
+}

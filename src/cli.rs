@@ -122,6 +122,10 @@ pub struct Knobs {
     /// VPL distance clamp `d_min`, as a fraction of the scene's bounding-box diagonal.
     #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub vpl_clamp: Option<f32>,
+    /// Interleaved VPL sampling: each pixel of a K x K pattern evaluates 1/K^2 of the VPLs,
+    /// then a geometry-aware filter reconstructs (1 = off).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub interleave: Option<u32>,
     /// Depth margin of VPL map lookups, in texel footprints.
     #[arg(long, value_name = "B", allow_negative_numbers = true)]
     pub vpl_bias: Option<f32>,
@@ -225,6 +229,9 @@ impl Knobs {
         if let Some(n) = self.vpl_map_res {
             io.map.resolution = n;
         }
+        if let Some(k) = self.interleave {
+            io.interleave = k;
+        }
         if let Some(b) = self.vpl_bias {
             if !(b >= 0.0 && b.is_finite()) {
                 bail!("--vpl-bias must be a finite number >= 0, got {b}");
@@ -264,6 +271,7 @@ pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
         "vpl_clamp": o.indirect_opts.clamp,
         "vpl_map_res": o.indirect_opts.map.resolution,
         "vpl_bias": o.indirect_opts.bias,
+        "interleave": o.indirect_opts.interleave,
         "max_depth": max_depth,
     })
 }

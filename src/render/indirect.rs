@@ -127,12 +127,27 @@ impl Vpls<'_> {
     /// Indirect radiance leaving the diffuse point `s` towards its viewer:
     /// `Kd / pi * sum_v I_v cos_x cos_v / max(d^2, d_min^2)` over the visible VPLs.
     pub fn at(&self, r: &Renderer, s: &SurfaceHit, counts: &mut RayCounts) -> Vec3 {
+        self.at_subset(r, s, 0, 1, counts)
+    }
+
+    /// [`Vpls::at`] over the VPLs `subset, subset + stride, ...` only, scaled by `stride`: the
+    /// interleaved estimate of a point with no screen neighbours to filter with (a mirror hit
+    /// of the pixel whose subset it is), unbiased and noisier.
+    pub fn at_subset(
+        &self,
+        r: &Renderer,
+        s: &SurfaceHit,
+        subset: usize,
+        stride: usize,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
         let kd = r.scene.materials[r.scene.material[s.tri as usize] as usize].kd;
         if kd == Vec3::ZERO {
             return Vec3::ZERO;
         }
         let mut sum = Vec3::ZERO;
-        for (k, v) in self.vpls.iter().enumerate() {
+        let stride = stride.max(1);
+        for (k, v) in self.vpls.iter().enumerate().skip(subset).step_by(stride) {
             let Some(g) = self.geometry(s, v) else { continue };
             let visible = match self.maps.get(k) {
                 // No rays to settle it: an occluder within the bias band is taken to be the
@@ -148,7 +163,14 @@ impl Vpls<'_> {
                 sum += v.intensity * g;
             }
         }
-        kd * FRAC_1_PI * sum
+        kd * FRAC_1_PI * sum * stride as f32
+    }
+
+    /// The VPL subset of pixel `i` of a `width`-wide image under `k x k` interleaving, and the
+    /// stride between its VPLs (`k^2`).
+    pub fn subset_of(i: usize, width: usize, k: usize) -> (usize, usize) {
+        let (w, k) = (width.max(1), k.max(1));
+        ((i % w) % k + k * ((i / w) % k), k * k)
     }
 }
 
@@ -190,8 +212,7 @@ pub fn run(
             (kd != Vec3::ZERO).then(|| (SurfaceHit::new(r.scene, h, dir), kd))
         })
         .collect_into_vec(&mut pts);
-    let subset = |i: usize| (i % w) % k + k * ((i / w) % k);
-    let takes = |i: usize, vpl: usize| k == 1 || vpl % (k * k) == subset(i);
+    let takes = |i: usize, vpl: usize| k == 1 || vpl % (k * k) == Vpls::subset_of(i, w, k).0;
     let scale = (k * k) as f32;
     let mut irr = vec![Vec3::ZERO; n];
 

@@ -19,18 +19,22 @@ pub fn run(
     // Only hits on mirror materials start a path: skip the others before building their
     // shading point (most of the pass's time otherwise, on scenes with few mirrors).
     let mirror = |h: &Hit| r.scene.materials[r.scene.material[h.tri as usize] as usize].ks != Vec3::ZERO;
-    shade_hits_where(r, gbuffer, out, progress, mirror, |_, hit, c| reflected(r, hit, shadowing, vpls, c))
+    // Under interleaved VPL sampling, a pixel's mirror path sees its pixel's VPL subset.
+    let (w, k) = (r.scene.settings.width as usize, r.options.indirect_opts.interleave as usize);
+    shade_hits_where(r, gbuffer, out, progress, mirror, |i, hit, c| {
+        reflected(r, hit, shadowing, vpls.map(|v| (v, Vpls::subset_of(i, w, k))), c)
+    })
 }
 
 /// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces;
 /// each reflection is weighted by the product of `Ks` so far, and each surface it meets is
-/// shaded with direct light, indirect light from the VPLs when given, and its own reflection,
-/// while depth remains.
+/// shaded with direct light, indirect light from the VPLs when given (the subset and stride of
+/// interleaved sampling, `(0, 1)` for all), and its own reflection, while depth remains.
 pub fn reflected(
     r: &Renderer,
     first: &SurfaceHit,
     shadowing: Option<&Shadowing>,
-    vpls: Option<&Vpls>,
+    vpls: Option<(&Vpls, (usize, usize))>,
     counts: &mut RayCounts,
 ) -> Vec3 {
     let mut sum = Vec3::ZERO;
@@ -54,8 +58,8 @@ pub fn reflected(
         };
         hit = SurfaceHit::new(r.scene, &h, ray.dir);
         sum += weight * direct::shade_point(r, &hit, shadowing, counts);
-        if let Some(v) = vpls {
-            sum += weight * v.at(r, &hit, counts);
+        if let Some((v, (subset, stride))) = vpls {
+            sum += weight * v.at_subset(r, &hit, subset, stride, counts);
         }
     }
     sum

@@ -31,6 +31,21 @@ fn push_sphere(s: &mut Scene, r: f32, n: u32, m: u32) {
     }
 }
 
+/// The inside of a closed diffuse sphere (radius 3, albedo 0.5) with a light of intensity 2 at
+/// its centre, seen from near the centre; with the exact one-bounce indirect radiance
+/// `rho^2 E / pi` and the radius.
+fn closed_sphere() -> (Scene, f32, f32) {
+    let (rho, intensity, radius) = (0.5f32, 2.0f32, 3.0f32);
+    let mut s = Scene::new("sphere");
+    let m = s.add_material(Material::diffuse("wall", Vec3::splat(rho)));
+    push_sphere(&mut s, radius, 192, m);
+    s.lights = vec![PointLight { position: Vec3::ZERO, intensity: Vec3::splat(intensity) }];
+    s.camera = Some(Camera::look_at(vec3(0.0, 0.3, 0.5), vec3(1.0, 0.1, -3.0), Vec3::Y, 70.0));
+    s.settings = Settings { width: 96, height: 72, max_depth: 0, exposure: 1.0 };
+    s.validate().unwrap();
+    (s, rho * rho * intensity / (radius * radius) / std::f32::consts::PI, radius)
+}
+
 /// The indirect part alone: a render with indirect light minus one without.
 fn indirect_only(s: &Scene, opts: Options) -> (Vec<Vec3>, Frame) {
     let with = render(s, opts);
@@ -58,15 +73,7 @@ fn options(indirect: Indirect, paths: u32, clamp: f32) -> Options {
 /// `d_min`, off here, is what bounds those in practice.)
 #[test]
 fn closed_sphere_one_bounce_is_rho_times_direct() {
-    let (rho, intensity, radius) = (0.5f32, 2.0f32, 3.0f32);
-    let mut s = Scene::new("sphere");
-    let m = s.add_material(Material::diffuse("wall", Vec3::splat(rho)));
-    push_sphere(&mut s, radius, 192, m);
-    s.lights = vec![PointLight { position: Vec3::ZERO, intensity: Vec3::splat(intensity) }];
-    s.camera = Some(Camera::look_at(vec3(0.0, 0.3, 0.5), vec3(1.0, 0.1, -3.0), Vec3::Y, 70.0));
-    s.settings = Settings { width: 96, height: 72, max_depth: 0, exposure: 1.0 };
-    s.validate().unwrap();
-    let expected = rho * rho * intensity / (radius * radius) / std::f32::consts::PI;
+    let (s, expected, _) = closed_sphere();
     for ind in [Indirect::Rays, Indirect::Maps] {
         let (img, f) = indirect_only(&s, options(ind, 200, 0.0));
         assert!(f.stats.vpls >= 190, "{ind:?}: {} VPLs", f.stats.vpls);
@@ -99,15 +106,7 @@ fn closed_sphere_one_bounce_is_rho_times_direct() {
 /// within 0.3 % (the VPLs are a finite sample); with 0.01 the loss is 0.015 %.
 #[test]
 fn distance_clamp_bias_matches_its_analytic_value() {
-    let (rho, intensity, radius) = (0.5f32, 2.0f32, 3.0f32);
-    let mut s = Scene::new("sphere");
-    let m = s.add_material(Material::diffuse("wall", Vec3::splat(rho)));
-    push_sphere(&mut s, radius, 192, m);
-    s.lights = vec![PointLight { position: Vec3::ZERO, intensity: Vec3::splat(intensity) }];
-    s.camera = Some(Camera::look_at(vec3(0.0, 0.3, 0.5), vec3(1.0, 0.1, -3.0), Vec3::Y, 70.0));
-    s.settings = Settings { width: 96, height: 72, max_depth: 0, exposure: 1.0 };
-    s.validate().unwrap();
-    let expected = rho * rho * intensity / (radius * radius) / std::f32::consts::PI;
+    let (s, expected, radius) = closed_sphere();
     let diag = {
         let (lo, hi) = s.bounds().unwrap();
         (hi - lo).length()

@@ -317,8 +317,3 @@ fn interleave_filter(
         })
         .collect()
 }
-
-/// Total flux of the VPLs per channel (for tests: `pi * sum of intensities`).
-pub fn total_flux(vpls: &[vpl::Vpl]) -> Vec3 {
-    vpls.par_iter().map(|v| v.intensity * std::f32::consts::PI).reduce(|| Vec3::ZERO, |a, b| a + b)
-}

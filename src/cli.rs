@@ -31,6 +31,8 @@ pub enum Command {
     Render(RenderArgs),
     /// PSNR (dB) of luminance between two images (PNG or EXR), as displayed.
     Compare(CompareArgs),
+    /// Print the passes a scene needs and, for each skipped effect, why.
+    Plan(PlanArgs),
 }
 
 #[derive(Args, Debug)]
@@ -138,7 +140,24 @@ pub struct Knobs {
     pub check_visibility: bool,
 }
 
+/// Parses render flags alone (for `hyrt sweep` and `hyrt bench`).
+#[derive(Parser, Debug)]
+#[command(no_binary_name = true)]
+struct KnobParser {
+    #[command(flatten)]
+    knobs: Knobs,
+}
+
 impl Knobs {
+    /// The knobs of render flags, e.g. `["--preset", "hybrid", "--shadow-map-res", "512"]`;
+    /// clap's message (naming the flag) on error.
+    pub fn from_flags<S: AsRef<str>>(flags: &[S]) -> Result<Knobs> {
+        let args = flags.iter().map(|f| f.as_ref().to_string());
+        KnobParser::try_parse_from(args)
+            .map(|p| p.knobs)
+            .map_err(|e| anyhow::anyhow!("{}", e.render().to_string().trim_end()))
+    }
+
     /// The options these flags select for `scene`: a scene with an `[indirect]` table gets its
     /// VPL settings and indirect light (by rays under the reference preset, by maps under the
     /// hybrid one) unless `--indirect` says otherwise; flags override the scene's values.
@@ -322,6 +341,28 @@ pub enum MirrorArg {
 }
 
 #[derive(Args, Debug)]
+pub struct PlanArgs {
+    /// A built-in scene name, a `.toml` scene file, or a mesh file (as for `render`).
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Image size, overriding the scene's.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Maximum mirror bounces, overriding the scene's.
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u32>,
+    #[command(flatten)]
+    pub knobs: Knobs,
+    /// Also render two frames and print the plan each one carried out (per light: map and rays
+    /// or skipped; maps rebuilt or reused), with its counters.
+    #[arg(long)]
+    pub frames: bool,
+    /// Print the plan as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
 pub struct CompareArgs {
     /// First image (e.g. the reference).
     pub a: PathBuf,
@@ -351,6 +392,7 @@ pub fn run(cli: Cli) -> Result<()> {
             pool.install(|| render(&a))
         }
         Command::Compare(a) => compare(&a),
+        Command::Plan(a) => plan(&a),
     }
 }
 
@@ -474,4 +516,9 @@ fn compare(a: &CompareArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+fn plan(a: &PlanArgs) -> Result<()> {
+    let _ = a;
+    bail!("todo")
 }

@@ -7,6 +7,7 @@
 pub mod camera;
 pub mod cli;
 pub mod film;
+pub mod measure;
 pub mod metrics;
 pub mod plan;
 pub mod render;

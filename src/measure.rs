@@ -1,0 +1,285 @@
+//! Measuring configurations side by side: the core of `hyrt bench` and `hyrt sweep`.
+//!
+//! The machines are shared and noisy, so a comparison is measured in one process, with the
+//! configurations' frames alternated (frame 1 of every configuration, then frame 2, ...) and
+//! summarised by medians. Every configuration renders one warm-up frame first: it builds the
+//! BVH-independent caches (light maps, VPLs and their maps), whose cost is reported separately
+//! (`first_frame_ms`, `map_build_ms`) because a second frame of an unchanged scene reuses them.
+//!
+//! Accuracy is measured against a reference film: PSNR of display luminance
+//! ([`crate::metrics`]), and for map-based shadows the wrong-visibility pixels, from one more
+//! frame rendered with `check_visibility` (a shadow ray per map decision; not timed).
+
+use std::collections::BTreeMap;
+
+use hyrt_tracer::RayCounts;
+use serde::Serialize;
+
+use crate::{
+    film::Film,
+    metrics::{self, DisplayImage},
+    render::{Options, Renderer, Shadows},
+    scene::Scene,
+};
+
+/// Median, mean, minimum and maximum of repeated timings, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Timing {
+    pub runs: usize,
+    pub median: f64,
+    pub mean: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Timing {
+    /// Summary of `samples` (all zero if empty). The median of an even count is the mean of
+    /// the two middle samples.
+    pub fn of(samples: &[f64]) -> Self {
+        if samples.is_empty() {
+            return Self::default();
+        }
+        let mut s = samples.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
+        Self { runs: n, median, mean: s.iter().sum::<f64>() / n as f64, min: s[0], max: s[n - 1] }
+    }
+
+    /// Frames per second as the thesis reports them: frames over total time (1000 / mean ms).
+    pub fn fps_mean(&self) -> f64 {
+        if self.mean > 0.0 { 1e3 / self.mean } else { 0.0 }
+    }
+}
+
+/// A named configuration to measure.
+#[derive(Clone, Debug)]
+pub struct Config {
+    pub label: String,
+    pub options: Options,
+}
+
+/// What measuring one configuration on one scene gave.
+#[derive(Clone, Debug, Serialize)]
+pub struct Measurement {
+    pub label: String,
+    /// Steady-state frame time (caches warm), over the timed frames.
+    pub frame_ms: Timing,
+    /// Median per pass over the timed frames (`FrameStats::time_ms` keys, `total` excluded).
+    pub pass_ms: BTreeMap<String, f64>,
+    /// The first frame, which builds the light and VPL maps.
+    pub first_frame_ms: f64,
+    /// Light-map and VPL-map build time of the first frame.
+    pub map_build_ms: f64,
+    /// BVH build when the renderer was created.
+    pub bvh_build_ms: f64,
+    /// Rays of one steady-state frame, by kind (identical from frame to frame).
+    pub rays: RayCountsJson,
+    /// Memory of the light maps and VPL maps, in bytes.
+    pub map_bytes: u64,
+    /// Against the reference film, if one was given.
+    pub psnr_db: Option<f64>,
+    /// Map-based shadows with a check frame: (pixel, light) pairs whose map decision a shadow
+    /// ray contradicts, summed over the lights, and the number of distinct such pixels.
+    pub wrong_pairs: Option<u64>,
+    pub wrong_pixels: Option<u64>,
+    /// The last frame's film (not serialised).
+    #[serde(skip)]
+    pub film: Film,
+}
+
+/// Ray counts with their derived totals, for reports.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct RayCountsJson {
+    pub primary: u64,
+    pub shadow: u64,
+    pub shadow_hint_hits: u64,
+    pub shadow_traversals: u64,
+    pub specular: u64,
+    pub vpl_shadow: u64,
+    pub vpl_path: u64,
+    pub total: u64,
+}
+
+impl From<RayCounts> for RayCountsJson {
+    fn from(r: RayCounts) -> Self {
+        Self {
+            primary: r.primary,
+            shadow: r.shadow,
+            shadow_hint_hits: r.shadow_hint_hits,
+            shadow_traversals: r.shadow_traversals(),
+            specular: r.specular,
+            vpl_shadow: r.vpl_shadow,
+            vpl_path: r.vpl_path,
+            total: r.total(),
+        }
+    }
+}
+
+/// How to measure.
+#[derive(Clone, Copy, Debug)]
+pub struct MeasureOptions {
+    /// Timed frames per configuration, after one warm-up frame.
+    pub runs: usize,
+    /// Render one more, untimed frame with `check_visibility` to count wrong-visibility pixels
+    /// (configurations with map-based shadows only).
+    pub check: bool,
+}
+
+/// Measures `configs` on `scene`, their timed frames alternated, and compares each film with
+/// `reference` (a film of the same size) when given. `progress` is called after every frame
+/// with the configuration's label.
+///
+/// All renderers (and their maps) are alive at once: pass a few configurations at a time.
+pub fn measure(
+    scene: &Scene,
+    configs: &[Config],
+    reference: Option<&Film>,
+    mo: MeasureOptions,
+    progress: &dyn Fn(&str),
+) -> anyhow::Result<Vec<Measurement>> {
+    if let Some(r) = reference
+        && (r.width, r.height) != (scene.settings.width, scene.settings.height)
+    {
+        anyhow::bail!(
+            "reference film is {}x{}, the scene renders {}x{}",
+            r.width,
+            r.height,
+            scene.settings.width,
+            scene.settings.height
+        );
+    }
+    let renderers: Vec<Renderer> = configs.iter().map(|c| Renderer::new(scene, c.options)).collect();
+    let mut out: Vec<Measurement> = configs
+        .iter()
+        .zip(&renderers)
+        .map(|(c, r)| {
+            let f = r.render(&|| {});
+            progress(&c.label);
+            let t = |k: &str| f.stats.time_ms.get(k).copied().unwrap_or(0.0);
+            Measurement {
+                label: c.label.clone(),
+                frame_ms: Timing::default(),
+                pass_ms: BTreeMap::new(),
+                first_frame_ms: t("total"),
+                map_build_ms: t("map_build") + t("vpl_map_build"),
+                bvh_build_ms: r.bvh_build_ms(),
+                rays: f.stats.rays.into(),
+                map_bytes: f.stats.lights.iter().map(|l| l.map_bytes).sum::<u64>() + f.stats.vpl_map_bytes,
+                psnr_db: None,
+                wrong_pairs: None,
+                wrong_pixels: None,
+                film: f.film,
+            }
+        })
+        .collect();
+
+    let mut frames: Vec<Vec<f64>> = vec![Vec::new(); configs.len()];
+    let mut passes: Vec<BTreeMap<String, Vec<f64>>> = vec![BTreeMap::new(); configs.len()];
+    for _ in 0..mo.runs {
+        for (i, r) in renderers.iter().enumerate() {
+            let f = r.render(&|| {});
+            progress(&configs[i].label);
+            for (k, v) in &f.stats.time_ms {
+                if *k == "total" {
+                    frames[i].push(*v);
+                } else {
+                    passes[i].entry((*k).to_string()).or_default().push(*v);
+                }
+            }
+            out[i].rays = f.stats.rays.into();
+            out[i].film = f.film;
+        }
+    }
+    for (i, m) in out.iter_mut().enumerate() {
+        m.frame_ms = Timing::of(&frames[i]);
+        m.pass_ms = passes[i].iter().map(|(k, v)| (k.clone(), Timing::of(v).median)).collect();
+        if let Some(r) = reference {
+            m.psnr_db = Some(psnr(scene, r, &m.film)?);
+        }
+    }
+    drop(renderers);
+
+    if mo.check {
+        for (m, c) in out.iter_mut().zip(configs) {
+            if c.options.shadows == Shadows::Rays {
+                continue;
+            }
+            let (pairs, pixels) = wrong_visibility(scene, c.options);
+            progress(&c.label);
+            (m.wrong_pairs, m.wrong_pixels) = (Some(pairs), Some(pixels));
+        }
+    }
+    Ok(out)
+}
+
+/// Renders one frame of `scene` with `options` (e.g. the reference) and returns its film.
+pub fn render_film(scene: &Scene, options: Options) -> Film {
+    Renderer::new(scene, options).render(&|| {}).film
+}
+
+/// PSNR (dB, display luminance at the scene's exposure) of `film` against `reference`.
+pub fn psnr(scene: &Scene, reference: &Film, film: &Film) -> anyhow::Result<f64> {
+    let e = scene.settings.exposure;
+    let c = metrics::compare(&DisplayImage::from_film(reference, e), &DisplayImage::from_film(film, e))?;
+    Ok(c.psnr_db)
+}
+
+/// Wrong-visibility counts of map-based shadows with `options`: (pixel, light) pairs whose map
+/// decision a shadow ray contradicts, and distinct pixels with at least one such light.
+pub fn wrong_visibility(scene: &Scene, mut options: Options) -> (u64, u64) {
+    options.check_visibility = true;
+    options.keep_buffers = true;
+    let f = Renderer::new(scene, options).render(&|| {});
+    let pairs = f.stats.lights.iter().filter_map(|l| l.wrong).sum();
+    let pixels = f.shadows.as_ref().map_or(0, |b| {
+        let n = f.film.pixels.len();
+        (0..n).filter(|&i| b.wrong.iter().any(|w| w.get(i).copied().unwrap_or(false))).count() as u64
+    });
+    (pairs, pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_summarises() {
+        let t = Timing::of(&[4.0, 1.0, 3.0, 2.0]);
+        assert_eq!((t.runs, t.median, t.mean, t.min, t.max), (4, 2.5, 2.5, 1.0, 4.0));
+        assert_eq!(Timing::of(&[5.0, 1.0, 9.0]).median, 5.0);
+        assert_eq!(Timing::of(&[]).runs, 0);
+        assert_eq!(Timing::of(&[2.0, 2.0]).fps_mean(), 500.0);
+    }
+
+    /// Alternated frames of two configurations on the built-in scene: every timed frame is
+    /// counted, the reference compared with itself is exact, and the hybrid's wrong-visibility
+    /// pixels are counted (and no more than its (pixel, light) pairs).
+    #[test]
+    fn measures_side_by_side() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        scene.settings.width = 64;
+        scene.settings.height = 48;
+        let reference = render_film(&scene, Options::reference());
+        let configs = [
+            Config { label: "reference".into(), options: Options::reference() },
+            Config { label: "hybrid".into(), options: Options::hybrid() },
+        ];
+        let calls = std::sync::atomic::AtomicUsize::new(0);
+        let mo = MeasureOptions { runs: 3, check: true };
+        let m = measure(&scene, &configs, Some(&reference), mo, &|_| {
+            calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        })
+        .unwrap();
+        // 2 warm-up + 2 x 3 timed + 1 check frame (the reference has no map decisions).
+        assert_eq!(calls.into_inner(), 2 + 6 + 1);
+        assert_eq!(m[0].frame_ms.runs, 3);
+        assert_eq!(m[0].psnr_db, Some(f64::INFINITY));
+        assert!(m[1].psnr_db.unwrap() > 30.0, "{:?}", m[1].psnr_db);
+        assert_eq!(m[0].wrong_pairs, None);
+        let (pairs, pixels) = (m[1].wrong_pairs.unwrap(), m[1].wrong_pixels.unwrap());
+        assert!(pixels <= pairs, "{pixels} > {pairs}");
+        assert_eq!(m[1].rays.primary, 0);
+        assert!(m[0].rays.primary > 0 && m[0].map_bytes == 0 && m[1].map_bytes > 0);
+    }
+}

@@ -33,6 +33,9 @@ pub enum Command {
     Compare(CompareArgs),
     /// Print the passes a scene needs and, for each skipped effect, why.
     Plan(PlanArgs),
+    /// Reproduce the thesis's tables 4.1 to 4.5: reference and hybrid configurations measured
+    /// side by side, with the thesis's figures.
+    Bench(crate::bench::BenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -373,7 +376,7 @@ pub struct CompareArgs {
     pub json: bool,
 }
 
-fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, e.g. 640x480, got '{s}'"))?;
     let p =
         |v: &str| v.trim().parse::<u32>().map_err(|_| format!("expected WxH with whole numbers, got '{s}'"));
@@ -393,6 +396,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Compare(a) => compare(&a),
         Command::Plan(a) => plan(&a),
+        Command::Bench(a) => crate::bench::run(&a),
     }
 }
 
@@ -453,6 +457,7 @@ fn render(a: &RenderArgs) -> Result<()> {
     let frame = renderer.render(&|| bar.inc(1));
     bar.finish_and_clear();
 
+    say(format!("this frame:\n{}", crate::plan::format_decisions(&frame.stats.decisions).trim_end()));
     let r = &frame.stats.rays;
     let times: Vec<String> = frame.stats.time_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
     say(format!(
@@ -518,7 +523,56 @@ fn compare(a: &CompareArgs) -> Result<()> {
     Ok(())
 }
 
+/// `hyrt plan`: the static plan, and with `--frames` what two frames actually did.
 fn plan(a: &PlanArgs) -> Result<()> {
-    let _ = a;
-    bail!("todo")
+    let mut scene = scene::load(&a.scene)?;
+    if let Some((w, h)) = a.size {
+        scene.settings.width = w;
+        scene.settings.height = h;
+    }
+    if let Some(d) = a.max_depth {
+        scene.settings.max_depth = d;
+    }
+    scene.validate()?;
+    let options = a.knobs.options_for(&scene)?;
+    if !a.frames {
+        let plan = crate::plan::Plan::new(&scene, &options);
+        if a.json {
+            println!("{}", serde_json::to_string_pretty(&plan)?);
+        } else {
+            println!("{}: {} triangles, {} lights", scene.name, scene.triangle_count(), scene.lights.len());
+            print!("{plan}");
+        }
+        return Ok(());
+    }
+    let renderer = Renderer::new(&scene, options);
+    let frames: Vec<_> = (0..2).map(|_| renderer.render(&|| {}).stats).collect();
+    if a.json {
+        let f: Vec<_> = frames
+            .iter()
+            .map(|s| {
+                serde_json::json!({
+                    "decisions": s.decisions,
+                    "maps_built": s.maps_built,
+                    "rays": crate::measure::RayCountsJson::from(s.rays),
+                    "passes": s.time_ms.keys().filter(|k| **k != "total").collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+        let v = serde_json::json!({ "plan": renderer.plan, "frames": f });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!("{}: {} triangles, {} lights", scene.name, scene.triangle_count(), scene.lights.len());
+    print!("{}", renderer.plan);
+    for (i, s) in frames.iter().enumerate() {
+        let r = &s.rays;
+        println!("frame {}:", i + 1);
+        print!("{}", crate::plan::format_decisions(&s.decisions));
+        println!(
+            "  rays: primary {} shadow {} specular {} vpl_shadow {} vpl_path {}; light maps built {}",
+            r.primary, r.shadow, r.specular, r.vpl_shadow, r.vpl_path, s.maps_built
+        );
+    }
+    Ok(())
 }

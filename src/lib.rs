@@ -4,6 +4,7 @@
 //! planner ([`plan`]), the one pipeline with per-stage strategies ([`render`]), film output
 //! ([`film`]) and image metrics ([`metrics`]).
 
+pub mod bench;
 pub mod camera;
 pub mod cli;
 pub mod film;

@@ -17,6 +17,31 @@ pub struct PassDecision {
     pub reason: String,
 }
 
+/// A decision taken while rendering a frame, where the static [`Plan`] cannot know the answer
+/// beforehand: per light whether it needs a map and rays at all, and whether cached data (BVH,
+/// light maps, VPLs) was reused or rebuilt.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct FrameDecision {
+    /// What it concerns: `bvh`, `light 3`, `vpls`, `vpl_maps`.
+    pub what: String,
+    /// Whether work was done for it in this frame (a build, a map, rays).
+    pub run: bool,
+    pub reason: String,
+}
+
+impl FrameDecision {
+    pub fn new(what: impl Into<String>, run: bool, reason: impl Into<String>) -> Self {
+        Self { what: what.into(), run, reason: reason.into() }
+    }
+}
+
+/// Prints frame decisions one per line, as [`Plan`]'s `Display` does.
+pub fn format_decisions(d: &[FrameDecision]) -> String {
+    d.iter()
+        .map(|d| format!("  {}  {:<11} {}\n", if d.run { "run " } else { "skip" }, d.what, d.reason))
+        .collect()
+}
+
 /// The passes one frame runs, in order, and those it skips.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Plan {
@@ -41,6 +66,15 @@ impl Plan {
         plan.add(true, "visibility", vis);
 
         let lights = scene.lights.len();
+        for (l, light) in scene.lights.iter().enumerate() {
+            if light.intensity.max_element() <= 0.0 {
+                plan.add(
+                    false,
+                    "light",
+                    format!("light {l}: zero intensity: no map, no shadow rays, no VPLs"),
+                );
+            }
+        }
         if lights == 0 {
             plan.add(false, "direct", "the scene has no point lights".into());
         } else {
@@ -98,7 +132,11 @@ impl Plan {
         } else if scene.settings.max_depth == 0 {
             plan.add(false, "specular", "max_depth = 0".into());
         } else {
-            let names = used_specular.join(", ");
+            // Some scenes give every material a little `Ks`: name a few.
+            let mut names = used_specular.iter().take(4).cloned().collect::<Vec<_>>().join(", ");
+            if used_specular.len() > 4 {
+                names += &format!(" and {} more", used_specular.len() - 4);
+            }
             plan.add(
                 true,
                 "specular",

@@ -24,6 +24,9 @@ pub struct RenderStats<'a> {
     /// left undecided (given a shadow ray), map faces drawn, and with `--check-visibility` the
     /// map decisions a shadow ray contradicts (`wrong`).
     pub shadow_lights: Vec<crate::render::shadows::LightStats>,
+    /// What the frame rebuilt or reused (BVH, light maps, VPLs), and per light whether it
+    /// needed a map and rays at all.
+    pub frame_decisions: Vec<crate::plan::FrameDecision>,
     /// Light maps built for this frame (0: all cached).
     pub maps_built: u32,
     /// With indirect light: the VPLs and the memory of their maps.
@@ -64,6 +67,7 @@ impl<'a> RenderStats<'a> {
             plan: plan.pass_names(),
             plan_detail: plan,
             shadow_lights: frame.lights.clone(),
+            frame_decisions: frame.decisions.clone(),
             maps_built: frame.maps_built,
             vpls: frame.vpls,
             vpl_map_bytes: frame.vpl_map_bytes,

@@ -384,3 +384,63 @@ fn scene_file_indirect_table_asks_for_vpls() {
     w("bad_clamp.toml", &scene.replace("clamp = 0.02", "clamp = -1.0"));
     assert_fails(&d, &["bad_clamp.toml"], &["bad_clamp.toml:", "clamp must be a finite number >= 0"]);
 }
+
+/// `hyrt plan`: the static plan names skipped effects; with `--frames`, the second frame of the
+/// unchanged scene builds no map (counters from the JSON).
+#[test]
+fn plan_command_prints_plan_and_frame_decisions() {
+    let (ok, out, err) = common::hyrt(&["plan", "cornell", "--max-depth", "0"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("skip  specular") && out.contains("max_depth = 0"), "{out}");
+    assert!(out.contains("skip  indirect"), "{out}");
+
+    let (ok, out, err) =
+        common::hyrt(&["plan", "cornell", "--preset", "hybrid", "--size", "48x36", "--frames", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let frames = v["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 2);
+    assert_eq!(frames[0]["maps_built"], 2);
+    assert_eq!(frames[1]["maps_built"], 0);
+    assert_eq!(frames[1]["rays"]["primary"], 0);
+    assert!(
+        frames[1]["decisions"].as_array().unwrap().iter().any(|d| d["what"] == "bvh" && d["run"] == false)
+    );
+    assert!(v["plan"]["run"].as_array().unwrap().iter().any(|d| d["pass"] == "classify"));
+
+    let (ok, _, err) = common::hyrt(&["plan", "no-such-scene.toml"]);
+    assert!(!ok && err.contains("no-such-scene.toml"), "{err}");
+}
+
+/// `hyrt bench` on the built-in scene: every table, one CSV row per configuration with its
+/// flags, and the reference compared with itself is exact.
+#[test]
+fn bench_writes_the_thesis_tables() {
+    let dir = common::out_dir("bench");
+    let out = dir.to_str().unwrap();
+    let (ok, stdout, err) =
+        common::hyrt(&["bench", "cornell", "--size", "40x30", "--runs", "1", "--vpls", "4", "--out", out]);
+    assert!(ok, "{err}");
+    for t in ["Table 4.1", "Table 4.2", "Table 4.4", "Table 4.5"] {
+        assert!(stdout.contains(t), "{t} missing: {stdout}");
+    }
+    let md = std::fs::read_to_string(dir.join("tables.md")).unwrap();
+    assert_eq!(md.trim(), stdout.trim());
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[0].starts_with("scene,config,flags,fps_mean,frame_ms_median"), "{}", rows[0]);
+    assert_eq!(rows.len(), 1 + 7, "{csv}");
+    let col = |name: &str| rows[0].split(',').position(|c| c == name).unwrap();
+    let rt: Vec<&str> = rows[1].split(',').collect();
+    assert_eq!((rt[1], rt[col("psnr_db")]), ("rt", "inf"));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("results.json")).unwrap()).unwrap();
+    let configs = v["scenes"][0]["configs"].as_array().unwrap();
+    assert_eq!(configs.len(), 7);
+    // Map-based shadows have a wrong-visibility count; the reference has none.
+    assert!(configs.iter().any(|c| c["label"] == "smerts-cube" && c["wrong_pixels"].is_u64()));
+    assert!(configs.iter().any(|c| c["label"] == "rt" && c["wrong_pixels"].is_null()));
+
+    let (ok, _, err) = common::hyrt(&["bench", "missing-scene.toml", "--out", out]);
+    assert!(!ok && err.contains("missing-scene.toml"), "{err}");
+}

@@ -17,6 +17,8 @@ use hyrt_shadowmap::{
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
+use crate::plan::FrameDecision;
+
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, ms, vpl};
 
 /// The knobs of indirect light.
@@ -58,6 +60,13 @@ pub(crate) struct VplCache {
     planes: OnceLock<Vec<Vec4>>,
 }
 
+impl VplCache {
+    /// Drops the VPL maps (made with other map options), keeping the VPLs.
+    pub(crate) fn drop_maps(&mut self) {
+        self.maps = OnceLock::new();
+    }
+}
+
 /// What the indirect pass needs per frame.
 pub struct Vpls<'r> {
     pub vpls: &'r [vpl::Vpl],
@@ -82,10 +91,21 @@ impl Renderer<'_> {
         if fresh {
             stats.rays += self.vpl_cache.vpls.get().expect("just made").1;
         }
+        stats.decisions.push(FrameDecision::new(
+            "vpls",
+            fresh,
+            if fresh {
+                format!("{} VPLs generated from {} light path(s)", vpls.len(), opts.vpl.paths)
+            } else {
+                format!("{} VPLs reused from an earlier frame", vpls.len())
+            },
+        ));
         stats.time_ms.insert("vpl_gen", ms(t));
         let t = Instant::now();
+        let mut fresh = false;
         let maps: &[LightMap] = if self.options.indirect == Indirect::Maps {
             self.vpl_cache.maps.get_or_init(|| {
+                fresh = true;
                 // One VPL map after another: each build is parallel inside.
                 vpls.iter()
                     .map(|v| {
@@ -97,6 +117,18 @@ impl Renderer<'_> {
             &[]
         };
         stats.time_ms.insert("vpl_map_build", ms(t));
+        if self.options.indirect == Indirect::Maps {
+            let n = self.options.indirect_opts.map.resolution;
+            stats.decisions.push(FrameDecision::new(
+                "vpl_maps",
+                fresh,
+                if fresh {
+                    format!("{} paraboloid maps of {n}x{n} built", maps.len())
+                } else {
+                    format!("{} maps reused from an earlier frame", maps.len())
+                },
+            ));
+        }
         stats.vpls = vpls.len() as u32;
         stats.vpl_map_bytes = maps.iter().map(|m| m.memory_bytes() as u64).sum();
         let planes = self.vpl_cache.planes.get_or_init(|| triangle_planes(&self.scene.positions));

@@ -198,6 +198,8 @@ pub struct FrameStats {
     pub vpl_map_bytes: u64,
     /// Milliseconds per pass, plus `total` for the frame (scene preparation excluded).
     pub time_ms: BTreeMap<&'static str, f64>,
+    /// What this frame rebuilt or reused, and the per-light decisions of map-based shadows.
+    pub decisions: Vec<crate::plan::FrameDecision>,
 }
 
 /// A rendered frame.
@@ -214,7 +216,8 @@ pub struct Renderer<'a> {
     pub scene: &'a Scene,
     pub tracer: Tracer,
     pub plan: Plan,
-    pub options: Options,
+    /// Private so that changes go through [`Renderer::set_options`], which drops stale caches.
+    pub(crate) options: Options,
     pub camera: CameraRays,
     /// Rasterization near-plane distance (see `visibility::near_plane`), fixed per scene.
     pub raster_near: f32,
@@ -240,12 +243,40 @@ impl<'a> Renderer<'a> {
         let cam = scene.camera.expect("validated scene has a camera");
         let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
         let raster_near = visibility::near_plane(scene, &camera);
-        let clusters = match options.visibility {
-            Visibility::Raster => cull::Clusters::new(&scene.positions),
-            Visibility::Rays => cull::Clusters::default(),
-        };
+        // Always: a few milliseconds for the largest scenes, and `set_options` may switch to
+        // raster visibility.
+        let clusters = cull::Clusters::new(&scene.positions);
         let (raster, maps, vpl_cache) = Default::default();
         Self { scene, tracer, plan, options, camera, raster_near, clusters, raster, maps, vpl_cache }
+    }
+
+    /// Changes the strategies and knobs of the next frames, keeping every cache the change
+    /// leaves valid: the BVH always (the scene is the same), the light maps unless their kind,
+    /// resolution or tessellation changed, the VPLs unless their count, bounces or seed changed,
+    /// and the VPL maps unless those or the VPL map options changed. Returns what was dropped.
+    pub fn set_options(&mut self, options: Options) -> Vec<&'static str> {
+        let old = self.options;
+        let mut dropped = Vec::new();
+        if options.shadow.map != old.shadow.map {
+            self.drop_light_maps(options.shadow.map.kind != old.shadow.map.kind);
+            dropped.push("light maps");
+        }
+        let (a, b) = (&old.indirect_opts, &options.indirect_opts);
+        if a.vpl != b.vpl {
+            self.vpl_cache = Default::default();
+            dropped.push("VPLs and their maps");
+        } else if a.map != b.map {
+            self.vpl_cache.drop_maps();
+            dropped.push("VPL maps");
+        }
+        self.plan = Plan::new(self.scene, &options);
+        self.options = options;
+        dropped
+    }
+
+    /// The strategies and knobs of the next frame.
+    pub fn options(&self) -> &Options {
+        &self.options
     }
 
     /// Wall time of the BVH build, in milliseconds.
@@ -278,6 +309,11 @@ impl<'a> Renderer<'a> {
         let (w, h) = (self.scene.settings.width, self.scene.settings.height);
         let n = w as usize * h as usize;
 
+        stats.decisions.push(crate::plan::FrameDecision::new(
+            "bvh",
+            false,
+            format!("reused: built once for the scene ({:.1} ms), which is unchanged", self.bvh_build_ms()),
+        ));
         let t = Instant::now();
         let gbuffer = visibility::run(self, progress, &mut stats);
         stats.time_ms.insert("visibility", ms(t));

@@ -29,12 +29,17 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit, ms};
-use crate::scene::PointLight;
+use crate::{plan::FrameDecision, scene::PointLight};
 
-/// Whether `light` can light `hit` at all (in front of both normals, not at the point): the
-/// condition under which the reference casts a shadow ray. `Some((wi, cos, d2))` if so.
+/// Whether `light` can light `hit` at all (a light with some intensity, in front of both
+/// normals, not at the point): the condition under which the reference casts a shadow ray.
+/// `Some((wi, cos, d2))` if so.
 #[inline]
 pub fn facing(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32, f32)> {
+    // A dark light adds nothing: no ray, no map (the plan says so).
+    if light.intensity.max_element() <= 0.0 {
+        return None;
+    }
     let to_light = light.position - hit.p;
     let d2 = to_light.length_squared();
     if d2 == 0.0 {
@@ -134,8 +139,14 @@ impl Renderer<'_> {
     }
 
     /// The light maps covering every face that a camera hit of `gbuffer` falls on, built (or
-    /// extended) if the cache lacks a face. Returns the maps and how many were (re)built.
-    fn light_maps(&self, points: &[(Vec3, u32)], faces: &[u8]) -> (Vec<Arc<LightMap>>, u32) {
+    /// extended) if the cache lacks a face. Returns the maps, how many were (re)built, and per
+    /// light what was done and why. A light that no camera hit is in front of gets an empty
+    /// map (no face drawn, nothing allocated): it is neither built nor counted.
+    fn light_maps(
+        &self,
+        points: &[(Vec3, u32)],
+        faces: &[u8],
+    ) -> (Vec<Arc<LightMap>>, u32, Vec<FrameDecision>) {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
         let lights = &self.scene.lights;
@@ -158,10 +169,44 @@ impl Renderer<'_> {
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
         cache.resize(lights.len(), None);
         let mut built = 0;
+        let mut decisions = Vec::with_capacity(lights.len());
         for (l, light) in lights.iter().enumerate() {
             let want = &needed[l * nf..(l + 1) * nf];
             let have = cache[l].as_ref().map(|m| m.faces_drawn().to_vec());
             let missing = have.as_ref().is_none_or(|h| want.iter().zip(h).any(|(w, h)| *w && !*h));
+            let wanted = want.iter().filter(|&&w| w).count();
+            let what = format!("light {l}");
+            if wanted == 0 {
+                let why = if light.intensity.max_element() <= 0.0 {
+                    "zero intensity"
+                } else {
+                    "no camera hit is in front of it"
+                };
+                decisions.push(FrameDecision::new(
+                    what,
+                    false,
+                    format!("{why}: no map, no classification, no shadow rays for camera hits"),
+                ));
+                if have.is_none() {
+                    cache[l] = Some(Arc::new(LightMap::build(
+                        &self.scene.positions,
+                        light.position,
+                        &self.options.shadow.map,
+                        &[],
+                    )));
+                }
+                continue;
+            }
+            // The light is in use either way; the reason says whether its map was rebuilt.
+            decisions.push(FrameDecision::new(
+                what,
+                true,
+                if missing {
+                    format!("map built: {wanted} of {nf} faces (those camera hits fall on)")
+                } else {
+                    format!("map reused from an earlier frame, not rebuilt ({wanted} of {nf} faces)")
+                },
+            ));
             if missing {
                 let faces: Vec<bool> = match &have {
                     Some(h) => want.iter().zip(h).map(|(w, h)| *w | *h).collect(),
@@ -173,7 +218,7 @@ impl Renderer<'_> {
                 built += 1;
             }
         }
-        (cache.iter().map(|m| m.clone().expect("built above")).collect(), built)
+        (cache.iter().map(|m| m.clone().expect("built above")).collect(), built, decisions)
     }
 
     /// The map-build, classify and borders passes for the camera hits (module docs).
@@ -214,9 +259,10 @@ impl Renderer<'_> {
         stats.time_ms.insert("surface", ms(t));
 
         let t = Instant::now();
-        let (maps, built) = self.light_maps(&bufs.points, &bufs.faces);
+        let (maps, built, decisions) = self.light_maps(&bufs.points, &bufs.faces);
         stats.time_ms.insert("map_build", ms(t));
         stats.maps_built = built;
+        stats.decisions.extend(decisions);
 
         let t = Instant::now();
         let planes: &'r [Vec4] = self.planes();
@@ -320,6 +366,15 @@ impl Renderer<'_> {
             })
             .collect();
         Shadowing { maps, bufs, lights, planes }
+    }
+
+    /// Drops the cached light maps (made with other map options); with `kind_changed`, also
+    /// which faces camera hits fall on (faces differ between map kinds).
+    pub(crate) fn drop_light_maps(&mut self, kind_changed: bool) {
+        self.maps.maps.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
+        if kind_changed {
+            self.maps.needed = std::sync::OnceLock::new();
+        }
     }
 
     /// Keeps a frame's buffers for the next frame.

@@ -1,0 +1,527 @@
+//! `hyrt bench`: the thesis's tables 4.1 to 4.5, reproduced side by side with its figures.
+//!
+//! Per scene, seven configurations (render flags, listed in the output) are measured in one
+//! process with their frames alternated ([`crate::measure`]): so every ratio in a table is
+//! between frames rendered minutes apart at most, on the same machine state.
+//!
+//! | id | flags | used in |
+//! |---|---|---|
+//! | `rt` | `--preset reference` | 4.1 |
+//! | `rt-raster` | `--preset reference --visibility raster` | 4.1, 4.2 (the thesis's reference for 4.2 used projection too) |
+//! | `smerts-cube` | `--preset hybrid --shadow-map cube` | 4.2 |
+//! | `smerts-para` | `--preset hybrid --shadow-map paraboloid` | 4.2 |
+//! | `rt-vpl` | `--preset reference --indirect rays --vpls N` | 4.4, 4.5 |
+//! | `vpl-maps` | `--preset reference --indirect maps --vpls N` | 4.4 |
+//! | `hybrid-vpl` | `--preset hybrid --indirect maps --vpls N` | 4.5 |
+//!
+//! PSNR is on display luminance against `rt` (direct light) or `rt-vpl` (with indirect light).
+//! Table 4.3 (SMeRTS on the thesis's GPU tracer) has no CPU counterpart and is not reproduced.
+
+use std::{fmt::Write as _, io::IsTerminal, path::PathBuf};
+
+use anyhow::{Context, Result};
+use serde::Serialize;
+
+use crate::{
+    cli::Knobs,
+    film::atomic_write,
+    measure::{self, Config, MeasureOptions, Measurement},
+    scene,
+};
+
+/// Arguments of `hyrt bench`.
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Scenes (names or scene files). Default: the three thesis scenes in `scenes/`.
+    #[arg(value_name = "SCENE")]
+    pub scenes: Vec<String>,
+    /// Timed frames per configuration, after one warm-up frame that builds the maps.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+    /// VPL light paths for tables 4.4 and 4.5 (thesis: 45).
+    #[arg(long, default_value_t = 45)]
+    pub vpls: u32,
+    /// Image size, overriding the scenes' (the thesis used 640x480).
+    #[arg(long, value_name = "WxH", value_parser = crate::cli::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Output folder for `tables.md`, `results.csv` and `results.json`.
+    #[arg(long, default_value = "bench-results")]
+    pub out: PathBuf,
+    /// Skip the untimed frames that count wrong-visibility pixels.
+    #[arg(long)]
+    pub no_check: bool,
+    /// Rayon worker threads (default: all cores).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+}
+
+/// The configurations of every table: id and render flags (module docs).
+fn configs(vpls: u32) -> Vec<(&'static str, String)> {
+    let v = format!("--indirect rays --vpls {vpls}");
+    let m = format!("--indirect maps --vpls {vpls}");
+    vec![
+        ("rt", "--preset reference".into()),
+        ("rt-raster", "--preset reference --visibility raster".into()),
+        ("smerts-cube", "--preset hybrid --shadow-map cube".into()),
+        ("smerts-para", "--preset hybrid --shadow-map paraboloid".into()),
+        ("rt-vpl", format!("--preset reference {v}")),
+        ("vpl-maps", format!("--preset reference {m}")),
+        ("hybrid-vpl", format!("--preset hybrid {m}")),
+    ]
+}
+
+/// The thesis's figures (`docs/thesis.md`, tables 4.1, 4.2, 4.4, 4.5) for a scene of ours.
+#[derive(Clone, Copy, Debug, Serialize)]
+struct Thesis {
+    name: &'static str,
+    /// 4.1: fps ray traced, fps projection, total rays RT / projection.
+    t41: (f64, f64, u64, u64),
+    /// 4.2: fps reference, fps SMeRTS, PSNR, shadow rays reference / SMeRTS.
+    t42: (f64, f64, f64, u64, u64),
+    /// 4.4: fps reference, fps maps, PSNR, VPL shadow rays removed (GPU tracer).
+    t44: Option<(f64, f64, f64, u64)>,
+    /// 4.5: fps reference, fps hybrid, PSNR, total shadow rays reference / hybrid.
+    t45: Option<(f64, f64, f64, u64, u64)>,
+}
+
+fn thesis(scene: &str) -> Option<Thesis> {
+    match scene {
+        "conference" => Some(Thesis {
+            name: "conference",
+            t41: (0.33, 0.48, 1_883_868, 1_528_242),
+            t42: (0.48, 1.44, 26.55, 1_454_268, 317_616),
+            t44: None,
+            t45: None,
+        }),
+        "office" => Some(Thesis {
+            name: "office",
+            t41: (0.68, 0.78, 3_238_040, 2_879_503),
+            t42: (0.78, 3.13, 19.29, 2_823_805, 503_185),
+            t44: Some((3.37, 27.04, 42.86, 12_971_207)),
+            t45: Some((3.37, 28.15, 37.45, 13_570_077, 31_100)),
+        }),
+        "cornell-bunny-mirror" => Some(Thesis {
+            name: "CornellBox",
+            t41: (2.82, 2.86, 2_414_082, 2_169_063),
+            t42: (2.86, 4.75, 34.12, 1_908_247, 665_338),
+            t44: Some((4.44, 56.62, 34.72, 12_225_116)),
+            t45: Some((4.44, 38.71, 34.41, 12_530_271, 3_339)),
+        }),
+        _ => None,
+    }
+}
+
+/// One scene's measurements.
+#[derive(Serialize)]
+struct SceneResult {
+    scene: String,
+    triangles: usize,
+    lights: usize,
+    width: u32,
+    height: u32,
+    flags: Vec<(String, String)>,
+    configs: Vec<Measurement>,
+    thesis: Option<Thesis>,
+}
+
+impl SceneResult {
+    fn get(&self, id: &str) -> &Measurement {
+        self.configs.iter().find(|m| m.label == id).expect("every configuration is measured")
+    }
+}
+
+/// Runs `hyrt bench`.
+pub fn run(a: &BenchArgs) -> Result<()> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.map_or(0, |t| t as usize))
+        .build()
+        .context("cannot start worker threads")?;
+    pool.install(|| bench(a))
+}
+
+fn bench(a: &BenchArgs) -> Result<()> {
+    let scenes: Vec<String> = if a.scenes.is_empty() {
+        ["scenes/cornell-bunny-mirror.toml", "scenes/office.toml", "scenes/conference.toml"]
+            .map(String::from)
+            .to_vec()
+    } else {
+        a.scenes.clone()
+    };
+    // Everything that can fail before hours of rendering: scenes, flags, the output folder.
+    let mut loaded = Vec::new();
+    for s in &scenes {
+        let mut sc = scene::load(s)?;
+        if let Some((w, h)) = a.size {
+            sc.settings.width = w;
+            sc.settings.height = h;
+        }
+        sc.validate().with_context(|| s.clone())?;
+        loaded.push(sc);
+    }
+    let flags = configs(a.vpls);
+    let mut per_scene = Vec::new();
+    for sc in &loaded {
+        let mut cs = Vec::new();
+        for (id, f) in &flags {
+            let words: Vec<&str> = f.split_whitespace().collect();
+            let options = Knobs::from_flags(&words)?.options_for(sc)?;
+            cs.push(Config { label: (*id).to_string(), options });
+        }
+        per_scene.push(cs);
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create folder", a.out.display()))?;
+
+    let frames_per_scene = flags.len() as u64 * (1 + u64::from(a.runs)) + if a.no_check { 0 } else { 3 };
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(frames_per_scene * loaded.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+
+    let mut results = Vec::new();
+    for (sc, cs) in loaded.iter().zip(per_scene) {
+        eprintln!(
+            "{}: {} triangles, {} lights, {}x{}",
+            sc.name,
+            sc.triangle_count(),
+            sc.lights.len(),
+            sc.settings.width,
+            sc.settings.height
+        );
+        let mo = MeasureOptions { runs: a.runs as usize, check: !a.no_check };
+        let mut ms = measure::measure(sc, &cs, None, mo, &|label| {
+            bar.set_message(format!("{} {label}", sc.name));
+            bar.inc(1);
+        })?;
+        // PSNR against the matching reference: direct light alone, or with the same VPLs.
+        let film = |id: &str| ms.iter().find(|m| m.label == id).map(|m| m.film.clone()).expect("measured");
+        let (rt, rt_vpl) = (film("rt"), film("rt-vpl"));
+        for m in &mut ms {
+            let reference = if cs
+                .iter()
+                .any(|c| c.label == m.label && c.options.indirect != crate::render::Indirect::None)
+            {
+                &rt_vpl
+            } else {
+                &rt
+            };
+            m.psnr_db = Some(measure::psnr(sc, reference, &m.film)?);
+        }
+        for m in &ms {
+            eprintln!(
+                "  {:<12} median {:>8.1} ms  mean fps {:>6.2}  PSNR {}",
+                m.label,
+                m.frame_ms.median,
+                m.frame_ms.fps_mean(),
+                fmt_db(m.psnr_db)
+            );
+        }
+        results.push(SceneResult {
+            scene: sc.name.clone(),
+            triangles: sc.triangle_count(),
+            lights: sc.lights.len(),
+            width: sc.settings.width,
+            height: sc.settings.height,
+            flags: flags.iter().map(|(i, f)| ((*i).to_string(), f.clone())).collect(),
+            configs: ms,
+            thesis: thesis(&sc.name),
+        });
+    }
+    bar.finish_and_clear();
+
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let md = tables(&results, a, &command);
+    let csv = csv(&results);
+    let json = serde_json::to_string_pretty(&serde_json::json!({
+        "command": command,
+        "threads": rayon::current_num_threads(),
+        "runs": a.runs,
+        "scenes": results,
+    }))?;
+    for (name, text) in [("tables.md", &md), ("results.csv", &csv), ("results.json", &json)] {
+        let p = a.out.join(name);
+        atomic_write(&p, |tmp| std::fs::write(tmp, text).map_err(Into::into))?;
+        eprintln!("wrote {}", p.display());
+    }
+    println!("{md}");
+    Ok(())
+}
+
+fn fmt_db(p: Option<f64>) -> String {
+    match p {
+        Some(p) if p.is_infinite() => "inf".into(),
+        Some(p) => format!("{p:.2}"),
+        None => "-".into(),
+    }
+}
+
+fn fps(m: &Measurement) -> f64 {
+    m.frame_ms.fps_mean()
+}
+
+/// Thousands separators, as the thesis prints ray counts.
+fn n(v: u64) -> String {
+    let s = v.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+fn ratio(a: f64, b: f64) -> String {
+    if b > 0.0 { format!("{:.2}x", a / b) } else { "-".into() }
+}
+
+/// The Markdown report: the tables with the thesis's figures beside ours.
+fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Produced by `{command}` ({} threads, {} timed frames per configuration after a warm-up, frames of the configurations alternated). \
+         fps = frames / total time (the thesis's mean); frame times are medians. Thesis: Intel i5-750, 4 threads (GPU for 4.4 and 4.5).\n",
+        rayon::current_num_threads(),
+        a.runs
+    );
+    let _ = writeln!(s, "Configurations (render flags):\n");
+    if let Some(r) = results.first() {
+        for (id, f) in &r.flags {
+            let _ = writeln!(s, "- `{id}`: `{f}`");
+        }
+    }
+
+    let _ = writeln!(s, "\n### Table 4.1: primary visibility (rays vs rasterization)\n");
+    let _ = writeln!(
+        s,
+        "| scene | fps RT | fps raster | speed-up | thesis fps RT / proj. | visibility ms RT / raster | shadow rays RT / raster | specular rays RT / raster | total rays RT / raster | thesis total rays |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in results {
+        let (x, y) = (r.get("rt"), r.get("rt-raster"));
+        let vis = |m: &Measurement| m.pass_ms.get("visibility").copied().unwrap_or(0.0);
+        let th = r.thesis.map_or("-".into(), |t| format!("{} / {}", t.t41.0, t.t41.1));
+        let tr = r.thesis.map_or("-".into(), |t| format!("{} / {}", n(t.t41.2), n(t.t41.3)));
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.2} | {} | {th} | {:.1} / {:.1} | {} / {} | {} / {} | {} / {} | {tr} |",
+            r.scene,
+            fps(x),
+            fps(y),
+            ratio(fps(y), fps(x)),
+            vis(x),
+            vis(y),
+            n(x.rays.shadow),
+            n(y.rays.shadow),
+            n(x.rays.specular),
+            n(y.rays.specular),
+            n(x.rays.total),
+            n(y.rays.total)
+        );
+    }
+
+    let _ =
+        writeln!(s, "\n### Table 4.2: direct light with SMeRTS (reference with rasterized visibility too)\n");
+    let _ = writeln!(
+        s,
+        "| scene | lights | fps ref | fps SMeRTS cube / para | speed-up cube / para | thesis fps ref / SMeRTS | PSNR cube / para | thesis PSNR | wrong px cube / para | shadow rays ref / cube / para | thesis shadow rays | map build ms cube / para | map MB cube / para |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in results {
+        let (b, c, d) = (r.get("rt-raster"), r.get("smerts-cube"), r.get("smerts-para"));
+        let wrong = |m: &Measurement| m.wrong_pixels.map_or("-".into(), |w| w.to_string());
+        let (thf, thp, thr) = r.thesis.map_or(("-".into(), "-".into(), "-".into()), |t| {
+            (
+                format!("{} / {}", t.t42.0, t.t42.1),
+                format!("{:.2}", t.t42.2),
+                format!("{} / {}", n(t.t42.3), n(t.t42.4)),
+            )
+        });
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {:.2} / {:.2} | {} / {} | {thf} | {} / {} | {thp} | {} / {} | {} / {} / {} | {thr} | {:.0} / {:.0} | {:.0} / {:.0} |",
+            r.scene,
+            r.lights,
+            fps(b),
+            fps(c),
+            fps(d),
+            ratio(fps(c), fps(b)),
+            ratio(fps(d), fps(b)),
+            fmt_db(c.psnr_db),
+            fmt_db(d.psnr_db),
+            wrong(c),
+            wrong(d),
+            n(b.rays.shadow),
+            n(c.rays.shadow),
+            n(d.rays.shadow),
+            c.map_build_ms,
+            d.map_build_ms,
+            c.map_bytes as f64 / 1e6,
+            d.map_bytes as f64 / 1e6,
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nTable 4.3 (SMeRTS on the thesis's GPU tracer, OptiX) has no CPU counterpart here and is not reproduced."
+    );
+
+    let _ = writeln!(
+        s,
+        "\n### Table 4.4: indirect light, {} VPLs: shadow rays vs one paraboloid map per VPL\n",
+        a.vpls
+    );
+    let _ = writeln!(
+        s,
+        "| scene | fps ref | fps maps | speed-up | thesis fps ref / maps | PSNR | thesis PSNR | VPL shadow rays removed | thesis removed | indirect pass ms rays / maps | VPL map build ms | VPL maps MB |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in results {
+        let (e, f) = (r.get("rt-vpl"), r.get("vpl-maps"));
+        let ind = |m: &Measurement| m.pass_ms.get("indirect").copied().unwrap_or(0.0);
+        let t = r.thesis.and_then(|t| t.t44);
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {:.0} | {:.0} |",
+            r.scene,
+            fps(e),
+            fps(f),
+            ratio(fps(f), fps(e)),
+            t.map_or("-".into(), |t| format!("{} / {}", t.0, t.1)),
+            fmt_db(f.psnr_db),
+            t.map_or("-".into(), |t| format!("{:.2}", t.2)),
+            n(e.rays.vpl_shadow.saturating_sub(f.rays.vpl_shadow)),
+            t.map_or("-".into(), |t| n(t.3)),
+            ind(e),
+            ind(f),
+            f.map_build_ms,
+            f.map_bytes as f64 / 1e6,
+        );
+    }
+
+    let _ = writeln!(s, "\n### Table 4.5: both together (SMeRTS + VPL maps) vs the full reference\n");
+    let _ = writeln!(
+        s,
+        "| scene | fps ref | fps hybrid | speed-up | thesis fps ref / hybrid | PSNR | thesis PSNR | shadow + VPL shadow rays ref / hybrid | thesis |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in results {
+        let (e, g) = (r.get("rt-vpl"), r.get("hybrid-vpl"));
+        let t = r.thesis.and_then(|t| t.t45);
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.2} | {} | {} | {} | {} | {} / {} | {} |",
+            r.scene,
+            fps(e),
+            fps(g),
+            ratio(fps(g), fps(e)),
+            t.map_or("-".into(), |t| format!("{} / {}", t.0, t.1)),
+            fmt_db(g.psnr_db),
+            t.map_or("-".into(), |t| format!("{:.2}", t.2)),
+            n(e.rays.shadow + e.rays.vpl_shadow),
+            n(g.rays.shadow + g.rays.vpl_shadow),
+            t.map_or("-".into(), |t| format!("{} / {}", n(t.3), n(t.4))),
+        );
+    }
+
+    let _ = writeln!(s, "\n### Every configuration: frame time (ms) and fps\n");
+    let _ = writeln!(
+        s,
+        "| scene | config | fps (mean) | median ms | min ms | max ms | first frame ms | BVH ms | PSNR |"
+    );
+    let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    for r in results {
+        for m in &r.configs {
+            let t = &m.frame_ms;
+            let _ = writeln!(
+                s,
+                "| {} | `{}` | {:.2} | {:.1} | {:.1} | {:.1} | {:.0} | {:.0} | {} |",
+                r.scene,
+                m.label,
+                t.fps_mean(),
+                t.median,
+                t.min,
+                t.max,
+                m.first_frame_ms,
+                m.bvh_build_ms,
+                fmt_db(m.psnr_db)
+            );
+        }
+    }
+    s
+}
+
+/// One row per scene and configuration.
+fn csv(results: &[SceneResult]) -> String {
+    let mut s = String::from(
+        "scene,config,flags,fps_mean,frame_ms_median,frame_ms_mean,frame_ms_min,frame_ms_max,runs,first_frame_ms,map_build_ms,bvh_build_ms,map_bytes,psnr_db,wrong_pixels,wrong_pairs,rays_primary,rays_shadow,rays_shadow_hint_hits,rays_specular,rays_vpl_shadow,rays_vpl_path,rays_total\n",
+    );
+    for r in results {
+        for m in &r.configs {
+            let flags = r.flags.iter().find(|(i, _)| *i == m.label).map_or("", |(_, f)| f.as_str());
+            let t = &m.frame_ms;
+            let opt = |v: Option<u64>| v.map_or(String::new(), |v| v.to_string());
+            let _ = writeln!(
+                s,
+                "{},{},\"{}\",{:.4},{:.3},{:.3},{:.3},{:.3},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
+                r.scene,
+                m.label,
+                flags,
+                t.fps_mean(),
+                t.median,
+                t.mean,
+                t.min,
+                t.max,
+                t.runs,
+                m.first_frame_ms,
+                m.map_build_ms,
+                m.bvh_build_ms,
+                m.map_bytes,
+                m.psnr_db.map_or(String::new(), |p| if p.is_infinite() {
+                    "inf".into()
+                } else {
+                    format!("{p:.3}")
+                }),
+                opt(m.wrong_pixels),
+                opt(m.wrong_pairs),
+                m.rays.primary,
+                m.rays.shadow,
+                m.rays.shadow_hint_hits,
+                m.rays.specular,
+                m.rays.vpl_shadow,
+                m.rays.vpl_path,
+                m.rays.total
+            );
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thousands() {
+        assert_eq!(n(0), "0");
+        assert_eq!(n(999), "999");
+        assert_eq!(n(1000), "1,000");
+        assert_eq!(n(12_971_207), "12,971,207");
+    }
+
+    #[test]
+    fn every_configuration_parses() {
+        for (id, f) in configs(45) {
+            let words: Vec<&str> = f.split_whitespace().collect();
+            Knobs::from_flags(&words).and_then(|k| k.options()).unwrap_or_else(|e| panic!("{id}: {e}"));
+        }
+        let e = Knobs::from_flags(&["--no-such-flag"]).expect_err("an unknown flag parses");
+        assert!(e.to_string().contains("--no-such-flag"), "{e}");
+    }
+}

@@ -1,0 +1,193 @@
+//! Only the effects a scene calls for: each rule of the plan, on a scene where it applies and
+//! on one where it does not, asserting both the plan (or the frame's decisions) and the
+//! counters that show the work was really skipped (or done).
+
+mod common;
+
+use common::floor_scene;
+use glam::{Vec3, vec3};
+use hyrt::{
+    plan::FrameDecision,
+    render::{Indirect, Options, Renderer},
+    scene::{IndirectSettings, PointLight, Scene},
+};
+
+fn cornell(w: u32, h: u32) -> Scene {
+    let mut s = hyrt::scene::load("cornell").unwrap();
+    s.settings.width = w;
+    s.settings.height = h;
+    s
+}
+
+fn decision<'a>(d: &'a [FrameDecision], what: &str) -> &'a FrameDecision {
+    d.iter().find(|d| d.what == what).unwrap_or_else(|| panic!("no decision about {what}: {d:?}"))
+}
+
+fn light(position: Vec3, intensity: f32) -> PointLight {
+    PointLight { position, intensity: Vec3::splat(intensity) }
+}
+
+/// No mirror material: no reflection pass and no specular rays. With one (the built-in
+/// Cornell box's mirror): the pass runs and casts rays. `max_depth = 0` turns it off as well.
+#[test]
+fn reflections_only_with_mirrors() {
+    let with = cornell(64, 48);
+    let mut without = with.clone();
+    for m in &mut without.materials {
+        m.ks = Vec3::ZERO;
+    }
+    let mut depth0 = with.clone();
+    depth0.settings.max_depth = 0;
+    for opts in [Options::reference(), Options::hybrid()] {
+        let r = Renderer::new(&with, opts);
+        assert!(r.plan.runs("specular"));
+        assert!(r.render(&|| {}).stats.rays.specular > 0);
+        for (s, why) in [(&without, "mirror reflectance"), (&depth0, "max_depth = 0")] {
+            let r = Renderer::new(s, opts);
+            assert!(!r.plan.runs("specular"));
+            let skipped = r.plan.skipped.iter().find(|d| d.pass == "specular").expect("listed as skipped");
+            assert!(skipped.reason.contains(why), "{skipped:?}");
+            let f = r.render(&|| {});
+            assert_eq!(f.stats.rays.specular, 0);
+            assert!(!f.stats.time_ms.contains_key("specular"));
+        }
+    }
+}
+
+/// No indirect settings: no VPLs, no VPL rays, no VPL decisions. An `[indirect]` table (or
+/// options asking for VPLs) makes them.
+#[test]
+fn vpls_only_when_asked() {
+    let plain = cornell(48, 36);
+    let r = Renderer::new(&plain, Options::hybrid());
+    assert!(!r.plan.runs("indirect"));
+    let f = r.render(&|| {});
+    assert_eq!((f.stats.vpls, f.stats.rays.vpl_path, f.stats.rays.vpl_shadow), (0, 0, 0));
+    assert!(f.stats.decisions.iter().all(|d| !d.what.starts_with("vpl")));
+
+    let mut asked = plain.clone();
+    asked.indirect = Some(IndirectSettings { vpls: 6, bounces: 1, seed: 0, clamp: None });
+    let knobs = hyrt::cli::Knobs::from_flags(&["--preset", "hybrid"]).unwrap();
+    let opts = knobs.options_for(&asked).unwrap();
+    assert_eq!(opts.indirect, Indirect::Maps);
+    let r = Renderer::new(&asked, opts);
+    assert!(r.plan.runs("indirect"));
+    let f = r.render(&|| {});
+    assert!(f.stats.vpls > 0 && f.stats.rays.vpl_path > 0);
+    assert!(decision(&f.stats.decisions, "vpls").run);
+    assert!(decision(&f.stats.decisions, "vpl_maps").run);
+}
+
+/// A light that no visible surface faces (under the floor the camera looks at) gets no map and
+/// no rays, in the hybrid and in the reference; a dark light (zero intensity) likewise, and the
+/// plan names it. The same light above the floor is used.
+#[test]
+fn lights_that_reach_no_visible_pixel_cost_nothing() {
+    let above = light(vec3(0.3, 2.0, 0.1), 5.0);
+    let below = light(vec3(0.0, -1.0, 0.0), 5.0);
+    let dark = light(vec3(-0.3, 2.0, 0.0), 0.0);
+    let s = floor_scene(1.0, Vec3::splat(0.5), 1.5, 60.0, vec![above, below, dark], 40, 30);
+    let floor_px = {
+        let f = Renderer::new(&s, Options::reference()).render(&|| {});
+        f.film.pixels.iter().filter(|p| **p != Vec3::ZERO).count() as u64
+    };
+    assert!(floor_px > 0);
+
+    let r = Renderer::new(&s, Options::hybrid());
+    assert!(r.plan.skipped.iter().any(|d| d.reason.contains("light 2: zero intensity")), "{}", r.plan);
+    let f = r.render(&|| {});
+    let d = &f.stats.decisions;
+    assert!(decision(d, "light 0").run);
+    for (l, why) in [(1, "no camera hit is in front of it"), (2, "zero intensity")] {
+        let dl = decision(d, &format!("light {l}"));
+        assert!(!dl.run && dl.reason.contains(why), "{dl:?}");
+        let st = f.stats.lights[l];
+        assert_eq!((st.faces_drawn, st.map_bytes, st.lit + st.shadowed + st.undecided), (0, 0, 0), "{st:?}");
+    }
+    // Only the light above was built.
+    assert_eq!(f.stats.maps_built, 1);
+    assert_eq!(f.stats.lights[0].lit, floor_px);
+
+    // The reference casts one shadow ray per floor pixel: for the light above only.
+    let f = Renderer::new(&s, Options::reference()).render(&|| {});
+    assert_eq!(f.stats.rays.shadow, floor_px);
+
+    // Moved above the floor, the same lights are used: two more maps and rays.
+    let mut lit = s.clone();
+    lit.lights[1].position = vec3(0.0, 1.0, 0.4);
+    lit.lights[2].intensity = Vec3::splat(5.0);
+    let f = Renderer::new(&lit, Options::hybrid()).render(&|| {});
+    assert_eq!(f.stats.maps_built, 3);
+    assert!((0..3).all(|l| decision(&f.stats.decisions, &format!("light {l}")).run));
+    let f = Renderer::new(&lit, Options::reference()).render(&|| {});
+    assert_eq!(f.stats.rays.shadow, 3 * floor_px);
+}
+
+/// A second frame of an unchanged scene rebuilds nothing: 0 light maps built, the VPLs and
+/// their maps reused (no path rays), the BVH reused, and the same image. Changing a knob that
+/// the maps depend on rebuilds exactly what it must; one they do not depend on rebuilds none,
+/// and either way the image equals that of a fresh renderer.
+#[test]
+fn unchanged_scene_rebuilds_nothing() {
+    let mut s = cornell(48, 36);
+    s.indirect = Some(IndirectSettings { vpls: 4, bounces: 1, seed: 0, clamp: None });
+    let mut opts = Options::hybrid();
+    opts.indirect = Indirect::Maps;
+    opts.indirect_opts.vpl.paths = 4;
+    opts.shadow.map.resolution = 256;
+    opts.indirect_opts.map.resolution = 128;
+    let mut r = Renderer::new(&s, opts);
+    let lights = s.lights.len() as u32;
+
+    let first = r.render(&|| {});
+    assert_eq!(first.stats.maps_built, lights);
+    assert!(first.stats.rays.vpl_path > 0);
+    let second = r.render(&|| {});
+    assert_eq!(second.stats.maps_built, 0);
+    assert_eq!(second.stats.rays.vpl_path, 0);
+    let d = &second.stats.decisions;
+    for what in ["bvh", "vpls", "vpl_maps"] {
+        let x = decision(d, what);
+        assert!(!x.run && x.reason.contains("reused"), "{x:?}");
+    }
+    for l in 0..lights {
+        assert!(decision(d, &format!("light {l}")).reason.contains("not rebuilt"));
+    }
+    assert_eq!(first.film, second.film);
+
+    let fresh = |o: Options| Renderer::new(&s, o).render(&|| {}).film;
+
+    // Bias: a lookup knob. Nothing rebuilt.
+    let mut o = opts;
+    o.shadow.bias = 3.0;
+    o.indirect_opts.bias = 2.0;
+    assert!(r.set_options(o).is_empty());
+    let f = r.render(&|| {});
+    assert_eq!((f.stats.maps_built, f.stats.rays.vpl_path), (0, 0));
+    assert_eq!(f.film, fresh(o));
+
+    // Map resolution: the light maps only.
+    o.shadow.map.resolution = 128;
+    assert_eq!(r.set_options(o), ["light maps"]);
+    let f = r.render(&|| {});
+    assert_eq!((f.stats.maps_built, f.stats.rays.vpl_path), (lights, 0));
+    assert!(!decision(&f.stats.decisions, "vpl_maps").run);
+    assert_eq!(f.film, fresh(o));
+
+    // VPL map resolution: the VPL maps only, the VPLs stay.
+    o.indirect_opts.map.resolution = 64;
+    assert_eq!(r.set_options(o), ["VPL maps"]);
+    let f = r.render(&|| {});
+    assert_eq!((f.stats.maps_built, f.stats.rays.vpl_path), (0, 0));
+    assert!(decision(&f.stats.decisions, "vpl_maps").run && !decision(&f.stats.decisions, "vpls").run);
+    assert_eq!(f.film, fresh(o));
+
+    // VPL count: new VPLs and maps; map kind: new light maps.
+    o.indirect_opts.vpl.paths = 6;
+    o.shadow.map.kind = hyrt_shadowmap::MapKind::Paraboloid;
+    assert_eq!(r.set_options(o), ["light maps", "VPLs and their maps"]);
+    let f = r.render(&|| {});
+    assert_eq!(f.stats.maps_built, lights);
+    assert!(f.stats.rays.vpl_path > 0);
+    assert_eq!(f.film, fresh(o));
+}

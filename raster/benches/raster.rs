@@ -11,6 +11,11 @@
 //! * `offscreen`: 300k small triangles, four fifths of them outside the view (trivial rejection),
 //!   plus two huge floor triangles crossing the near plane (clipping, guard band).
 //!
+//! * `map_1024`: a shadow-map face: the inside of a 100k-triangle sphere seen from its centre
+//!   through a 90-degree square frustum at 1024x1024 (a sixth of the triangles in view, each a
+//!   few texels).
+//!
+//! divan prints input triangles per second (`item/s`) beside the time per frame.
 //! Run with `cargo bench -p hyrt-raster`.
 
 use divan::Bencher;
@@ -126,6 +131,10 @@ fn scene_offscreen() -> Vec<[Vec4; 3]> {
 }
 
 fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>, bary: bool) {
+    bench_size(bencher, tris, bary, WIDTH, HEIGHT);
+}
+
+fn bench_size(bencher: Bencher, tris: Vec<[Vec4; 3]>, bary: bool, width: u32, height: u32) {
     let ids: Vec<u32> = (0..tris.len() as u32).collect();
     let opts = RasterOptions {
         reversed_z: true,
@@ -134,8 +143,8 @@ fn bench(bencher: Bencher, tris: Vec<[Vec4; 3]>, bary: bool) {
         ..Default::default()
     };
     let (mut r, mut target) = (Rasterizer::new(), Target::default());
-    bencher.bench_local(|| {
-        r.rasterize_into(divan::black_box(&tris), &ids, WIDTH, HEIGHT, &opts, &mut target);
+    bencher.counter(divan::counter::ItemsCount::new(tris.len())).bench_local(|| {
+        r.rasterize_into(divan::black_box(&tris), &ids, width, height, &opts, &mut target);
         divan::black_box(&target);
     });
 }
@@ -158,4 +167,11 @@ fn tiny_200k(bencher: Bencher, bary: bool) {
 #[divan::bench(args = [false, true])]
 fn offscreen_300k(bencher: Bencher, bary: bool) {
     bench(bencher, scene_offscreen(), bary);
+}
+
+#[divan::bench(args = [false, true])]
+fn map_1024(bencher: Bencher, bary: bool) {
+    let proj = glam::camera::rh::proj::directx::perspective_infinite_reverse(90f32.to_radians(), 1.0, 0.01);
+    let view_proj = proj * glam::camera::rh::view::look_at_mat4(Vec3::ZERO, Vec3::Z, Vec3::Y);
+    bench_size(bencher, transform(&view_proj, &sphere(250, 201)), bary, 1024, 1024);
 }

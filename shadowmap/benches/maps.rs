@@ -100,3 +100,108 @@ fn paraboloid(bencher: Bencher, resolution: u32) {
     let tris = scene();
     bencher.bench(|| build(tris, MapKind::Paraboloid, resolution));
 }
+
+/// 64k points on the scene's surfaces with their triangle ids: random points of the triangles
+/// that random texels of a cube map show (mostly lit, some shadowed by the clutter). Fixed for
+/// every benchmark below.
+fn points() -> &'static [(Vec3, u32)] {
+    static P: OnceLock<Vec<(Vec3, u32)>> = OnceLock::new();
+    P.get_or_init(|| {
+        let tris = scene();
+        let map = build(tris, MapKind::Cube, 1024);
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        let mut out = Vec::with_capacity(1 << 16);
+        while out.len() < 1 << 16 {
+            // A random texel's surface point: the triangle it stores, at its centre's direction.
+            let d = (Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0).normalize_or(Vec3::X);
+            let c = map.coord(d);
+            let id = map.id(c.face, c.x as u32, c.y as u32);
+            if id == hyrt_shadowmap::EMPTY {
+                continue;
+            }
+            let [a, b, e] = tris[id as usize];
+            let (u, v) = (rng.f32(), rng.f32());
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            out.push((a + (b - a) * u + (e - a) * v, id));
+        }
+        out
+    })
+}
+
+fn planes() -> &'static [glam::Vec4] {
+    static P: OnceLock<Vec<glam::Vec4>> = OnceLock::new();
+    P.get_or_init(|| hyrt_shadowmap::classify::triangle_planes(scene()))
+}
+
+/// Map lookup and three-way classification ([`Classifier::classify`]) of 64k surface points
+/// against a 1024 map, in random order (cache-unfriendly, as at mirror hits; the screen-space
+/// pass visits neighbouring texels together and is faster); divan prints lookups/s (one core).
+#[divan::bench(args = ["cube", "paraboloid"])]
+fn classify(bencher: Bencher, kind: &str) {
+    use hyrt_shadowmap::classify::Classifier;
+    let kind = if kind == "cube" { MapKind::Cube } else { MapKind::Paraboloid };
+    static MAPS: OnceLock<[LightMap; 2]> = OnceLock::new();
+    let maps =
+        MAPS.get_or_init(|| [build(scene(), MapKind::Cube, 1024), build(scene(), MapKind::Paraboloid, 1024)]);
+    let map = &maps[usize::from(kind == MapKind::Paraboloid)];
+    let cls = Classifier { map, planes: planes(), bias: 1.0 };
+    let pts = points();
+    bencher.counter(divan::counter::ItemsCount::new(pts.len())).bench_local(|| {
+        pts.iter().filter(|(p, id)| cls.classify(*p, *id).decision == hyrt_shadowmap::border::LIT).count()
+    });
+}
+
+/// Border detection on a 640x480 occlusion map (a disc of shadow with a ragged edge and
+/// scattered thin occluders): the Laplacian, and dilation by 1 and 3 pixels; pixels/s.
+#[divan::bench(args = [0, 1, 3])]
+fn borders(bencher: Bencher, dilate: usize) {
+    use hyrt_shadowmap::border::{LIT, NONE, SHADOW, dilate as grow, laplacian_border};
+    let (w, h) = (640usize, 480usize);
+    let mut rng = Rng(7);
+    let occ: Vec<u8> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 - 320.0, (i / w) as f32 - 240.0);
+            let r = (x * x + y * y).sqrt() + 8.0 * (x.atan2(y) * 7.0).sin();
+            match rng.f32() {
+                v if v < 0.02 => NONE,
+                v if v < 0.05 => SHADOW,
+                _ if r < 150.0 => SHADOW,
+                _ => LIT,
+            }
+        })
+        .collect();
+    bencher.counter(divan::counter::ItemsCount::new(w * h)).bench(|| {
+        let b = laplacian_border(&occ, w, h);
+        if dilate > 0 { grow(&b, w, h, dilate) } else { b }
+    });
+}
+
+/// VPL gather: visibility of 4096 surface points from each of 45 VPLs, one 256x256 paraboloid
+/// hemisphere map per VPL (the renderer's interactive setting), by lookup alone; divan prints
+/// point-VPL lookups/s (one core).
+#[divan::bench(sample_count = 20)]
+fn vpl_gather(bencher: Bencher) {
+    use hyrt_shadowmap::classify::Classifier;
+    static VPLS: OnceLock<Vec<LightMap>> = OnceLock::new();
+    let tris = scene();
+    let maps = VPLS.get_or_init(|| {
+        // VPLs on the sphere, facing inwards.
+        let mut rng = Rng(99);
+        (0..45)
+            .map(|_| {
+                let d = (Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0).normalize_or(Vec3::Y);
+                let opts = MapOptions { kind: MapKind::Paraboloid, resolution: 256, tess_texels: 8.0 };
+                LightMap::build_hemisphere(tris, d * 3.5, -d, &opts)
+            })
+            .collect()
+    });
+    let pts = &points()[..4096];
+    bencher.counter(divan::counter::ItemsCount::new(pts.len() * maps.len())).bench_local(|| {
+        let mut seen = 0usize;
+        for map in maps {
+            let cls = Classifier { map, planes: planes(), bias: 0.5 };
+            seen += pts.iter().filter(|(p, id)| cls.visible(*p, *id)).count();
+        }
+        seen
+    });
+}

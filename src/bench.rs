@@ -130,13 +130,9 @@ impl SceneResult {
     }
 }
 
-/// Runs `hyrt bench`.
+/// Runs `hyrt bench` (on the caller's rayon pool).
 pub fn run(a: &BenchArgs) -> Result<()> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.map_or(0, |t| t as usize))
-        .build()
-        .context("cannot start worker threads")?;
-    pool.install(|| bench(a))
+    bench(a)
 }
 
 fn bench(a: &BenchArgs) -> Result<()> {

@@ -1,4 +1,4 @@
-//! The `hyrt` command line: `render` and `compare`.
+//! The `hyrt` command line: `render`, `compare`, `plan` and `sweep`.
 
 use std::{
     io::IsTerminal,
@@ -36,6 +36,10 @@ pub enum Command {
     /// Reproduce the thesis's tables 4.1 to 4.5: reference and hybrid configurations measured
     /// side by side, with the thesis's figures.
     Bench(crate::bench::BenchArgs),
+    /// Render every combination of some knobs' values (`--knob NAME=V1,V2,...`), measure each
+    /// one's frame time and error against a reference, and write a CSV, JSON, a plot of PSNR
+    /// against frame time with the Pareto front marked, and a summary.
+    Sweep(crate::sweep::SweepArgs),
 }
 
 #[derive(Args, Debug)]
@@ -386,18 +390,21 @@ pub(crate) fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
 /// Runs the CLI on parsed arguments.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Render(a) => {
-            let threads = a.threads.map(|t| t as usize).unwrap_or(0);
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .context("cannot start worker threads")?;
-            pool.install(|| render(&a))
-        }
+        Command::Render(a) => in_pool(a.threads, || render(&a)),
         Command::Compare(a) => compare(&a),
         Command::Plan(a) => plan(&a),
-        Command::Bench(a) => crate::bench::run(&a),
+        Command::Bench(a) => in_pool(a.threads, || crate::bench::run(&a)),
+        Command::Sweep(a) => in_pool(a.threads, || crate::sweep::run(&a)),
     }
+}
+
+/// Runs `f` in a rayon pool of `threads` workers (default: all cores).
+fn in_pool(threads: Option<u32>, f: impl FnOnce() -> Result<()> + Send) -> Result<()> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.map_or(0, |t| t as usize))
+        .build()
+        .context("cannot start worker threads")?;
+    pool.install(f)
 }
 
 fn render(a: &RenderArgs) -> Result<()> {

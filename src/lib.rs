@@ -2,7 +2,8 @@
 //!
 //! The library behind the `hyrt` CLI: scene model and loaders ([`scene`]), the effect
 //! planner ([`plan`]), the one pipeline with per-stage strategies ([`render`]), film output
-//! ([`film`]) and image metrics ([`metrics`]).
+//! ([`film`]), image metrics ([`metrics`]), and measurement ([`measure`]) with sweeps over the
+//! knobs ([`sweep`], plotted by [`plot`]).
 
 pub mod bench;
 pub mod camera;
@@ -11,6 +12,8 @@ pub mod film;
 pub mod measure;
 pub mod metrics;
 pub mod plan;
+pub mod plot;
 pub mod render;
 pub mod scene;
 pub mod stats;
+pub mod sweep;

@@ -60,6 +60,15 @@ pub(crate) struct VplCache {
     planes: OnceLock<Vec<Vec4>>,
 }
 
+impl Renderer<'_> {
+    /// The cached VPLs and, with `Indirect::Maps`, their maps (for inspection), once a frame
+    /// has made them.
+    pub fn cached_vpls(&self) -> Option<(&[vpl::Vpl], &[LightMap])> {
+        let (vpls, _) = self.vpl_cache.vpls.get()?;
+        Some((vpls, self.vpl_cache.maps.get().map_or(&[][..], |m| &m[..])))
+    }
+}
+
 impl VplCache {
     /// Drops the VPL maps (made with other map options), keeping the VPLs.
     pub(crate) fn drop_maps(&mut self) {
@@ -260,6 +269,7 @@ pub fn run(
                 for (j, acc) in irr.iter_mut().enumerate() {
                     let i = first + j;
                     let Some((s, _)) = &pts[i] else { continue };
+                    let before = c;
                     for (_, vpl) in v.vpls.iter().enumerate().filter(|(vi, _)| takes(i, *vi)) {
                         let Some(g) = v.geometry(s, vpl) else { continue };
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, vpl.position);
@@ -267,6 +277,7 @@ pub fn run(
                             *acc += vpl.intensity * g;
                         }
                     }
+                    r.pixel_rays.add(i, &before, &c);
                 }
             } else {
                 let mut located = Vec::with_capacity(irr.len());

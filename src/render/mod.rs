@@ -16,6 +16,7 @@
 pub mod cull;
 pub mod direct;
 pub mod indirect;
+mod pixel_rays;
 pub mod shadows;
 pub mod specular;
 pub mod surface;
@@ -209,6 +210,11 @@ pub struct Frame {
     /// With map-based shadows and `Options::keep_buffers`: the per-light occlusion, border and
     /// (with `check_visibility`) wrong-decision buffers.
     pub shadows: Option<shadows::ShadowBuffers>,
+    /// With `Options::keep_buffers`: the camera hit of every pixel (triangle, distance,
+    /// barycentrics), and the rays cast on behalf of every pixel by kind (module
+    /// `pixel_rays`: they sum to the frame's rays minus the VPL path rays).
+    pub gbuffer: Option<Vec<Option<Hit>>>,
+    pub pixel_rays: Option<Vec<RayCounts>>,
 }
 
 /// A scene prepared for rendering: its BVH and plan, built once and reused by every frame.
@@ -230,6 +236,8 @@ pub struct Renderer<'a> {
     maps: shadows::MapCache,
     /// VPLs and their maps, likewise.
     vpl_cache: indirect::VplCache,
+    /// Rays per pixel, with `Options::keep_buffers`.
+    pub(crate) pixel_rays: pixel_rays::PixelRays,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -247,7 +255,21 @@ impl<'a> Renderer<'a> {
         // raster visibility.
         let clusters = cull::Clusters::new(&scene.positions);
         let (raster, maps, vpl_cache) = Default::default();
-        Self { scene, tracer, plan, options, camera, raster_near, clusters, raster, maps, vpl_cache }
+        let n = scene.settings.width as usize * scene.settings.height as usize;
+        let pixel_rays = pixel_rays::PixelRays::new(n, options.keep_buffers);
+        Self {
+            scene,
+            tracer,
+            plan,
+            options,
+            camera,
+            raster_near,
+            clusters,
+            raster,
+            maps,
+            vpl_cache,
+            pixel_rays,
+        }
     }
 
     /// Changes the strategies and knobs of the next frames, keeping every cache the change
@@ -268,6 +290,10 @@ impl<'a> Renderer<'a> {
         } else if a.map != b.map {
             self.vpl_cache.drop_maps();
             dropped.push("VPL maps");
+        }
+        if options.keep_buffers != self.pixel_rays.enabled() {
+            let n = self.scene.settings.width as usize * self.scene.settings.height as usize;
+            self.pixel_rays = pixel_rays::PixelRays::new(n, options.keep_buffers);
         }
         self.plan = Plan::new(self.scene, &options);
         self.options = options;
@@ -305,6 +331,7 @@ impl<'a> Renderer<'a> {
     /// Renders one frame.
     pub fn render(&self, progress: Progress) -> Frame {
         let start = Instant::now();
+        self.pixel_rays.clear();
         let mut stats = FrameStats::default();
         let (w, h) = (self.scene.settings.width, self.scene.settings.height);
         let n = w as usize * h as usize;
@@ -361,7 +388,12 @@ impl<'a> Renderer<'a> {
                 None
             }
         });
-        Frame { film, stats, shadows }
+        let (gbuffer, pixel_rays) = if self.options.keep_buffers {
+            (Some(gbuffer), Some(self.pixel_rays.snapshot()))
+        } else {
+            (None, None)
+        };
+        Frame { film, stats, shadows, gbuffer, pixel_rays }
     }
 }
 
@@ -419,7 +451,9 @@ pub(crate) fn shade_hits_where(
         for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
             if let Some(hit) = hit.as_ref().filter(|h| filter(h)) {
                 let dir = r.camera_ray(x as u32, y).dir;
+                let before = *c;
                 *px = shade(first + x, &SurfaceHit::new(r.scene, hit, dir), c);
+                r.pixel_rays.add(first + x, &before, c);
             }
         }
     })

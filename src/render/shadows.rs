@@ -99,6 +99,11 @@ pub struct ShadowBuffers {
     pub map_border: Vec<Vec<bool>>,
     /// With `check_visibility`: the map decisions a shadow ray contradicts (else empty).
     pub wrong: Vec<Vec<bool>>,
+    /// With `Options::keep_buffers` (else empty): the border before dilation (pixels with a
+    /// decision only), and what each undecided pixel's shadow ray did: [`RAY_NONE`],
+    /// [`RAY_HINT`] (its occluder hint blocked it: no traversal) or [`RAY_TRAVERSAL`].
+    pub border: Vec<Vec<bool>>,
+    pub ray: Vec<Vec<u8>>,
     /// The shading points of the camera hits.
     pub(crate) surf: Vec<Option<SurfaceHit>>,
     /// Per pixel the shading point's position and triangle (`EMPTY` without one): the 16 bytes
@@ -109,6 +114,13 @@ pub struct ShadowBuffers {
     /// serves every light.
     faces: Vec<u8>,
 }
+
+/// [`ShadowBuffers::ray`]: no shadow ray for this pixel and light.
+pub const RAY_NONE: u8 = 0;
+/// [`ShadowBuffers::ray`]: a shadow ray answered by the map's occluder hint.
+pub const RAY_HINT: u8 = 1;
+/// [`ShadowBuffers::ray`]: a shadow ray that traversed the BVH.
+pub const RAY_TRAVERSAL: u8 = 2;
 
 /// Resizes `v` to `n` buffers of `len` elements equal to `fill`, reusing their memory.
 fn reset<T: Clone>(v: &mut Vec<Vec<T>>, n: usize, len: usize, fill: T) {
@@ -314,6 +326,8 @@ impl Renderer<'_> {
 
         let t = Instant::now();
         let opts = &self.options.shadow;
+        let keep = self.options.keep_buffers;
+        bufs.border.clear();
         if self.options.shadows == Shadows::Smerts {
             bufs.undecided.resize_with(nl, Vec::new);
             for ((u, o), mb) in bufs.undecided.iter_mut().zip(&bufs.occ).zip(&bufs.map_border) {
@@ -326,6 +340,9 @@ impl Renderer<'_> {
                         b
                     }
                 };
+                if keep {
+                    bufs.border.push(b.iter().zip(o).map(|(b, o)| *b && *o != NONE).collect());
+                }
                 if opts.dilate > 0 {
                     b = dilate(&b, w, h, opts.dilate as usize);
                 }
@@ -377,6 +394,12 @@ impl Renderer<'_> {
         }
     }
 
+    /// Light `l`'s cached map (for inspection), once a frame has built it; faces no camera hit
+    /// falls on are not drawn ([`LightMap::faces_drawn`]).
+    pub fn light_map(&self, l: usize) -> Option<Arc<LightMap>> {
+        self.maps.maps.lock().unwrap_or_else(|e| e.into_inner()).get(l).cloned().flatten()
+    }
+
     /// Keeps a frame's buffers for the next frame.
     pub(crate) fn recycle(&self, bufs: ShadowBuffers) {
         *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()) = bufs;
@@ -396,6 +419,12 @@ impl Shadowing<'_> {
             reset(&mut self.bufs.wrong, nl, n, false);
         } else {
             self.bufs.wrong.clear();
+        }
+        let keep = r.options.keep_buffers;
+        if keep {
+            reset(&mut self.bufs.ray, nl, n, RAY_NONE);
+        } else {
+            self.bufs.ray.clear();
         }
         let b = &mut self.bufs;
         for l in 0..nl {
@@ -417,7 +446,8 @@ impl Shadowing<'_> {
                     .filter(|&(i, &u)| u && occ[i] != NONE)
                     .map(|(i, _)| i as u32)
                     .collect();
-                let answers: Vec<(Vec<bool>, RayCounts)> = list
+                // Per ray: blocked, and answered by the hint.
+                let answers: Vec<(Vec<(bool, bool)>, RayCounts)> = list
                     .par_chunks(256)
                     .map(|chunk| {
                         let mut c = RayCounts::default();
@@ -426,25 +456,37 @@ impl Shadowing<'_> {
                             .map(|&i| {
                                 let s = surf[i as usize].as_ref().expect("classified pixels have a hit");
                                 let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
-                                r.tracer.occluded_with_hint(&ray, hint[i as usize], &mut c)
+                                let before = c;
+                                let blocked = r.tracer.occluded_with_hint(&ray, hint[i as usize], &mut c);
+                                r.pixel_rays.add(i as usize, &before, &c);
+                                (blocked, c.shadow_hint_hits > before.shadow_hint_hits)
                             })
                             .collect();
                         (blocked, c)
                     })
                     .collect();
+                let mut rays = b.ray.get_mut(l);
                 for (chunk, (blocked, c)) in list.chunks(256).zip(answers) {
-                    for (&i, b) in chunk.iter().zip(blocked) {
+                    for (&i, (b, by_hint)) in chunk.iter().zip(blocked) {
                         occ[i as usize] = if b { SHADOW } else { LIT };
+                        if let Some(rays) = rays.as_mut() {
+                            rays[i as usize] = if by_hint { RAY_HINT } else { RAY_TRAVERSAL };
+                        }
                     }
                     total += c;
                 }
                 continue;
             }
+            let ray_rows: Vec<&mut [u8]> = match b.ray.get_mut(l) {
+                Some(v) => v.chunks_mut(w).collect(),
+                None => (0..n.div_ceil(w)).map(|_| &mut [][..]).collect(),
+            };
             let counts: Vec<RayCounts> = occ
                 .par_chunks_mut(w)
                 .zip(wrong_rows)
+                .zip(ray_rows)
                 .enumerate()
-                .map(|(y, (row, wrong_row))| {
+                .map(|(y, ((row, wrong_row), ray_row))| {
                     let mut c = RayCounts::default();
                     for (x, o) in row.iter_mut().enumerate() {
                         let i = y * w + x;
@@ -455,7 +497,16 @@ impl Shadowing<'_> {
                         let s = surf[i].as_ref().expect("classified pixels have a hit");
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
                         if is_und {
+                            let before = c;
                             let blocked = r.tracer.occluded_with_hint(&ray, hint[i], &mut c);
+                            r.pixel_rays.add(i, &before, &c);
+                            if let Some(k) = ray_row.get_mut(x) {
+                                *k = if c.shadow_hint_hits > before.shadow_hint_hits {
+                                    RAY_HINT
+                                } else {
+                                    RAY_TRAVERSAL
+                                };
+                            }
                             *o = if blocked { SHADOW } else { LIT };
                         } else {
                             let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());

@@ -30,7 +30,9 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
         Visibility::Rays => {
             stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
                 for (x, px) in row.iter_mut().enumerate() {
+                    let before = *c;
                     *px = primary_ray(r, x as u32, y, c);
+                    r.pixel_rays.add(y as usize * w as usize + x, &before, c);
                 }
             });
         }
@@ -66,7 +68,9 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
                     // covers every pixel that needs a ray.)
                     for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
                         if px.is_none() && id != EMPTY_ID {
+                            let before = *c;
                             *px = primary_ray(r, x as u32, y, c);
+                            r.pixel_rays.add(y as usize * w as usize + x, &before, c);
                         }
                     }
                 }

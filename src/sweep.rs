@@ -7,16 +7,15 @@
 //! and every combination, are checked before anything is rendered or written.
 //!
 //! Measuring ([`crate::measure::measure`]): the reference is measured first (one warm-up frame,
-//! then `--runs` timed frames; its last frame is the reference film), then each combination on
-//! its own, one after the other: a warm-up frame that builds its maps, `--runs` timed frames
-//! (median, min, max), and for map-based shadows one untimed frame with a shadow ray per map
-//! decision that counts wrong-visibility pixels. One at a time rather than alternated with the
-//! reference or with each other, because a combination's maps can be large (2048x2048 cube
-//! maps take about 1 GB per scene) and only one set is alive at once; and because alternating
-//! with the reference would not make two combinations measured minutes apart any more
-//! comparable, while it would double the frames rendered. On a shared machine that drifts
-//! during a long sweep, read close frame times with that in mind (`min`/`max` show the spread
-//! within a combination).
+//! then `--runs` timed frames; its last frame is the reference film), then each combination in
+//! turn, its frames alternated with the reference's (a warm-up frame each, which builds the
+//! maps, then `--runs` timed frames of both, then for map-based shadows one untimed frame with
+//! a shadow ray per map decision that counts wrong-visibility pixels). A combination's speed-up
+//! is the reference's median over those alternated frames divided by its own: measured side by
+//! side, so that a machine whose load drifts during a long sweep (shared machines do) moves
+//! both alike. It costs twice the frames. Combinations are not alternated with each other:
+//! their maps can be large (2048x2048 cube maps take about 1 GB per scene) and only one set is
+//! alive at once; so compare two combinations by their speed-ups rather than their times.
 //!
 //! Error: PSNR of display luminance ([`crate::measure::psnr`]), the mean FLIP error
 //! ([`crate::metrics::flip_mean`]), and wrong-visibility pixels and (pixel, light) pairs. The
@@ -70,8 +69,9 @@ pub struct SweepArgs {
     /// appends `--NAME=VALUE` for every knob.
     #[arg(long, value_name = "FLAGS", default_value = "--preset hybrid", allow_hyphen_values = true)]
     pub base: String,
-    /// Render flags of the reference that errors are measured against (rendered and timed
-    /// once; its frame time gives the speed-ups).
+    /// Render flags of the reference that errors are measured against (its film is rendered
+    /// once; its frames are alternated with each combination's, and the speed-ups are
+    /// measured side by side).
     ///
     /// When the base flags or any knob turn indirect light on and these flags set neither
     /// `--indirect` nor `--vpls`, the reference gets `--indirect rays` with the same VPLs
@@ -204,6 +204,9 @@ struct Row {
     m: Measurement,
     /// Mean FLIP error against the reference (0 for the reference itself).
     flip: f64,
+    /// The reference's median frame time over the frames alternated with this row's, and
+    /// the ratio of it to this row's median.
+    ref_ms: f64,
     speedup: f64,
     /// Relative to the output directory, with `--images`.
     image: Option<String>,
@@ -267,7 +270,9 @@ pub fn run(a: &SweepArgs) -> Result<()> {
 
     let runs = a.runs as usize;
     let frames = |o: &Options| (1 + runs + usize::from(o.shadows != Shadows::Rays)) as u64;
-    let total = frames(&ref_options) + combos.iter().map(|c| frames(&c.options)).sum::<u64>();
+    // Each combination's frames come with as many of the reference's.
+    let total = frames(&ref_options) * (1 + combos.len() as u64)
+        + combos.iter().map(|c| frames(&c.options)).sum::<u64>();
     let bar = progress_bar(total);
     let say = |s: String| bar.suspend(|| eprintln!("{s}"));
     let progress = |label: &str| {
@@ -298,7 +303,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
     let mo = MeasureOptions { runs, check: true };
     let exposure = scene.settings.exposure;
     let ref_config = Config { label: "reference".into(), options: ref_options };
-    let mut m = measure(&scene, &[ref_config], None, mo, &progress)?.remove(0);
+    let mut m = measure(&scene, std::slice::from_ref(&ref_config), None, mo, &progress)?.remove(0);
     m.psnr_db = Some(f64::INFINITY);
     let ref_film = std::mem::replace(&mut m.film, Film::new(0, 0));
     let ref_display = DisplayImage::from_film(&ref_film, exposure);
@@ -309,6 +314,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
         options: ref_options,
         m,
         flip: 0.0,
+        ref_ms: 0.0,
         speedup: 1.0,
         image: None,
     };
@@ -316,6 +322,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
         reference.image = Some(write_images(&images, "reference", &ref_film, exposure)?);
     }
     let ref_ms = reference.m.frame_ms.median;
+    reference.ref_ms = ref_ms;
     say(format!("reference: {} ms", fmt_ms(ref_ms)));
 
     let ctx =
@@ -324,8 +331,11 @@ pub fn run(a: &SweepArgs) -> Result<()> {
     let n = combos.len();
     for (i, c) in combos.into_iter().enumerate() {
         let config = Config { label: c.label.clone(), options: c.options };
-        let mut m = measure(&scene, &[config], Some(&ref_film), mo, &progress)?.remove(0);
+        let mut pair = measure(&scene, &[ref_config.clone(), config], None, mo, &progress)?;
+        let mut m = pair.remove(1);
+        let side_by_side_ref_ms = pair[0].frame_ms.median;
         let film = std::mem::replace(&mut m.film, Film::new(0, 0));
+        m.psnr_db = Some(crate::measure::psnr(&scene, &ref_film, &film)?);
         let flip = flip_mean(&ref_display, &DisplayImage::from_film(&film, exposure))?;
         let image = if a.images {
             let name = format!("{:02}_{}", i + 1, file_stem(&c.label));
@@ -333,7 +343,8 @@ pub fn run(a: &SweepArgs) -> Result<()> {
         } else {
             None
         };
-        let speedup = if m.frame_ms.median > 0.0 { ref_ms / m.frame_ms.median } else { f64::NAN };
+        let speedup =
+            if m.frame_ms.median > 0.0 { side_by_side_ref_ms / m.frame_ms.median } else { f64::NAN };
         let row = Row {
             values: c.values,
             label: c.label,
@@ -341,6 +352,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
             options: c.options,
             m,
             flip,
+            ref_ms: side_by_side_ref_ms,
             speedup,
             image,
         };
@@ -534,10 +546,11 @@ fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
 }
 
-const CSV_COLUMNS: [&str; 15] = [
+const CSV_COLUMNS: [&str; 16] = [
     "frame_ms_median",
     "frame_ms_min",
     "frame_ms_max",
+    "reference_ms_side_by_side",
     "speedup_vs_reference",
     "psnr_db",
     "flip_mean",
@@ -569,6 +582,7 @@ fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
             format!("{median:.3}"),
             format!("{:.3}", m.frame_ms.min),
             format!("{:.3}", m.frame_ms.max),
+            format!("{:.3}", r.ref_ms),
             format!("{:.4}", r.speedup),
             fmt_psnr(m.psnr_db),
             format!("{:.6}", r.flip),
@@ -612,6 +626,7 @@ fn json(ctx: &Sweep, reference: &Row, rows: &[Row]) -> Result<serde_json::Value>
             "flags": r.flags,
             "options": options_json(&r.options, max_depth),
             "measurement": measurement_json(&r.m)?,
+            "reference_ms_side_by_side": r.ref_ms,
             "speedup_vs_reference": r.speedup,
             "flip_mean": r.flip,
             "pareto": pareto,
@@ -713,7 +728,8 @@ fn summary(ctx: &Sweep, reference: &Row, table: &str) -> String {
          - Knobs: {knobs}; each configuration is `{base}` followed by `--NAME=VALUE` per knob.\n\
          - Reference: `{reference}`{vpls}, {ref_ms} ms per frame.\n\
          - Frame time: median of {runs} frames after a warm-up frame (which builds the maps: \
-         `first frame ms`); {threads} threads; one configuration at a time.\n\
+         `first frame ms`); {threads} threads; each configuration's frames alternated with the \
+         reference's, and its speed-up measured against those (side by side).\n\
          - Error against the reference: PSNR of display luminance (higher is better), mean \
          FLIP (0 = identical, lower is better), `wrong px`: pixels whose map decision a shadow ray \
          contradicts, counted in an extra untimed frame.\n\

@@ -1,0 +1,16 @@
+#!/bin/sh
+# Regenerates the measurements committed under docs/: the thesis tables (docs/bench/) and one
+# accuracy-vs-time sweep per thesis scene (docs/sweeps/). Run from the project root on a quiet
+# machine, after `cargo build --release`; about 30 minutes on 2 cores.
+set -e
+H=./target/release/hyrt
+$H bench --runs 10 --out docs/bench
+$H sweep scenes/cornell-bunny-mirror.toml --runs 5 --out docs/sweeps/cornell-bunny-mirror \
+  --knob shadow-map=cube,paraboloid --knob shadow-map-res=256,512,1024,2048 --knob borders=laplacian,depth,both
+$H sweep scenes/office.toml --runs 5 --out docs/sweeps/office --base "--preset hybrid --shadow-map paraboloid" \
+  --knob shadow-map-res=512,1024,2048 --knob tess=2,8,inf --knob dilate=0,1
+$H sweep scenes/conference.toml --runs 3 --out docs/sweeps/conference \
+  --knob shadow-map-res=512,1024,2048 --knob bias=0.5,1,2 --knob borders=laplacian,depth
+$H sweep scenes/cornell-bunny-mirror.toml --runs 5 --out docs/sweeps/cornell-bunny-mirror-vpl \
+  --base "--preset hybrid --indirect maps --vpls 45" \
+  --knob vpl-map-res=256,512,1024 --knob interleave=1,2,4 --knob vpl-bias=0.25,0.5,1

@@ -141,7 +141,7 @@ impl Renderer<'_> {
         stats.vpls = vpls.len() as u32;
         stats.vpl_map_bytes = maps.iter().map(|m| m.memory_bytes() as u64).sum();
         let planes = self.vpl_cache.planes.get_or_init(|| triangle_planes(&self.scene.positions));
-        let diag = self.scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
+        let diag = self.bounds.map_or(1.0, |(lo, hi)| (hi - lo).length());
         let clamp = opts.clamp.max(0.0) * diag;
         Vpls { vpls, maps, planes, clamp2: clamp * clamp }
     }

@@ -238,6 +238,8 @@ pub struct Renderer<'a> {
     vpl_cache: indirect::VplCache,
     /// Rays per pixel, with `Options::keep_buffers`.
     pub(crate) pixel_rays: pixel_rays::PixelRays,
+    /// The scene's bounding box (`Scene::bounds` walks every vertex: once per scene).
+    pub(crate) bounds: Option<(Vec3, Vec3)>,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -269,6 +271,7 @@ impl<'a> Renderer<'a> {
             maps,
             vpl_cache,
             pixel_rays,
+            bounds: scene.bounds(),
         }
     }
 

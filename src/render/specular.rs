@@ -3,11 +3,21 @@
 use glam::Vec3;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray};
 
-use super::{Progress, Renderer, SurfaceHit, direct, indirect::Vpls, shade_hits_where, shadows::Shadowing};
+use rayon::prelude::*;
+
+use super::{Progress, Renderer, SurfaceHit, direct, indirect::Vpls, shadows::Shadowing};
 
 /// Adds the mirror-reflected light of every camera hit on a specular material; the surfaces
 /// the mirror paths meet decide shadows with `shadowing`'s maps when given (see
 /// `direct::shade_point`).
+///
+/// The paths advance together, one bounce at a time (a wavefront): all reflection rays of a
+/// bounce are traced, then their hits are put in spatial order (a Morton code of the hit
+/// point) and shaded. Mirror hits are scattered over the scene, and shading one looks up every
+/// light's map (and every VPL's) at its position and casts shadow rays from it: in pixel order
+/// those lookups jump across maps of up to a gigabyte, in spatial order neighbouring hits read
+/// neighbouring texels and traverse the same BVH nodes. Each path is still its own pixel's sum,
+/// accumulated in the same order as [`reflected`] does it: the image is bit-identical.
 pub fn run(
     r: &Renderer,
     gbuffer: &[Option<Hit>],
@@ -16,21 +26,157 @@ pub fn run(
     out: &mut [Vec3],
     progress: Progress,
 ) -> RayCounts {
-    // Only hits on mirror materials start a path: skip the others before building their
-    // shading point (most of the pass's time otherwise, on scenes with few mirrors).
-    let mirror = |h: &Hit| r.scene.materials[r.scene.material[h.tri as usize] as usize].ks != Vec3::ZERO;
+    let (w, h) = (r.scene.settings.width as usize, r.scene.settings.height as usize);
     // Under interleaved VPL sampling, a pixel's mirror path sees its pixel's VPL subset.
-    let (w, k) = (r.scene.settings.width as usize, r.options.indirect_opts.interleave as usize);
-    shade_hits_where(r, gbuffer, out, progress, mirror, |i, hit, c| {
-        reflected(r, hit, shadowing, vpls.map(|v| (v, Vpls::subset_of(i, w, k))), c)
-    })
+    let k = r.options.indirect_opts.interleave as usize;
+    let ks_of = |tri: u32| r.scene.materials[r.scene.material[tri as usize] as usize].ks;
+    // Only hits on mirror materials start a path: skip the others before building their
+    // shading point.
+    let mut paths: Vec<Path> = gbuffer
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, hit)| {
+            let hit = hit.as_ref().filter(|h| ks_of(h.tri) != Vec3::ZERO)?;
+            let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
+            let hit = SurfaceHit::new(r.scene, hit, dir);
+            Some(Path { pixel: i as u32, hit, weight: Vec3::ONE, sum: Vec3::ZERO, key: 0 })
+        })
+        .collect();
+    let (lo, hi) = r.bounds.unwrap_or_default();
+    let depth = r.scene.settings.max_depth as usize;
+    let mut done: Vec<Path> = Vec::with_capacity(paths.len());
+    let mut total = RayCounts::default();
+    let mut rows_reported = 0;
+    for d in 0..depth {
+        // Trace one bounce; the paths that leave the scene or reach a non-mirror end here.
+        let traced: Vec<(Vec<Path>, Vec<Path>, RayCounts)> = paths
+            .par_chunks_mut(256)
+            .map(|chunk| {
+                let mut c = RayCounts::default();
+                let mut live = Vec::with_capacity(chunk.len());
+                let mut ended = Vec::new();
+                for p in chunk.iter_mut() {
+                    let before = c;
+                    let next = bounce(r, &p.hit, &mut p.weight, ks_of(p.hit.tri), &mut c);
+                    r.pixel_rays.add(p.pixel as usize, &before, &c);
+                    match next {
+                        Some(hit) => {
+                            p.hit = hit;
+                            p.key = morton(hit.p, lo, hi);
+                            live.push(*p);
+                        }
+                        None => ended.push(*p),
+                    }
+                }
+                (live, ended, c)
+            })
+            .collect();
+        let mut next = Vec::with_capacity(paths.len());
+        for (live, ended, c) in traced {
+            next.extend(live);
+            done.extend(ended);
+            total += c;
+        }
+        // Spatial order; ties by pixel, so the order (and nothing else) is deterministic.
+        next.par_sort_unstable_by_key(|p| (p.key, p.pixel));
+        // Shade the new hits.
+        let shaded: Vec<RayCounts> = next
+            .par_chunks_mut(256)
+            .map(|chunk| {
+                let mut c = RayCounts::default();
+                for p in chunk.iter_mut() {
+                    let before = c;
+                    p.sum += p.weight * direct::shade_point(r, &p.hit, shadowing, &mut c);
+                    if let Some(v) = vpls {
+                        let (subset, stride) = Vpls::subset_of(p.pixel as usize, w, k);
+                        p.sum += p.weight * v.at_subset(r, &p.hit, subset, stride, &mut c);
+                    }
+                    r.pixel_rays.add(p.pixel as usize, &before, &c);
+                }
+                c
+            })
+            .collect();
+        total += shaded.into_iter().sum();
+        paths = next;
+        // Progress: the pass's rows, spread over the bounces.
+        let rows = h * (d + 1) / depth.max(1);
+        for _ in rows_reported..rows {
+            progress();
+        }
+        rows_reported = rows;
+        if paths.is_empty() {
+            break;
+        }
+    }
+    for _ in rows_reported..h {
+        progress();
+    }
+    for p in done.iter().chain(&paths) {
+        out[p.pixel as usize] = p.sum;
+    }
+    total
 }
 
-/// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces;
+/// A mirror path in flight: its pixel, the surface it last met, the product of `Ks` so far and
+/// the light gathered; `key` orders the paths spatially.
+#[derive(Clone, Copy)]
+struct Path {
+    pixel: u32,
+    hit: SurfaceHit,
+    weight: Vec3,
+    sum: Vec3,
+    key: u64,
+}
+
+/// One mirror bounce from `hit` (reflectance `ks`): the next surface, with `weight` multiplied
+/// by `ks`; `None` when `hit` is no mirror or the reflection leaves the scene.
+fn bounce(
+    r: &Renderer,
+    hit: &SurfaceHit,
+    weight: &mut Vec3,
+    ks: Vec3,
+    counts: &mut RayCounts,
+) -> Option<SurfaceHit> {
+    if ks == Vec3::ZERO {
+        return None;
+    }
+    *weight *= ks;
+    // Reflect about the shading normal; fall back to the geometric one if that would send the
+    // ray into the surface.
+    let mut dir = reflect(-hit.wo, hit.ns);
+    if dir.dot(hit.ng) <= 0.0 {
+        dir = reflect(-hit.wo, hit.ng);
+    }
+    let ray = spawn_ray(hit.p, hit.p_err, hit.ng, dir);
+    let h = r.tracer.closest_hit(&ray, RayKind::Specular, counts)?;
+    Some(SurfaceHit::new(r.scene, &h, ray.dir))
+}
+
+/// A 63-bit Morton code of `p` in the box `[lo, hi]` (21 bits per axis): points close in space
+/// get close codes.
+fn morton(p: Vec3, lo: Vec3, hi: Vec3) -> u64 {
+    let ext = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+    let q = ((p - lo) / ext).clamp(Vec3::ZERO, Vec3::ONE) * ((1u32 << 21) - 1) as f32;
+    // Spreads the 21 bits of `v` to every third bit.
+    let spread = |v: f32| {
+        let mut x = v as u64 & 0x1f_ffff;
+        x = (x | x << 32) & 0x1f_0000_0000_ffff;
+        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        (x | x << 2) & 0x1249_2492_4924_9249
+    };
+    spread(q.x) | spread(q.y) << 1 | spread(q.z) << 2
+}
+
+/// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces, one
+/// pixel's path on its own: what [`run`] computes for all of them at once (the test below holds
+/// the two to the same bits);
 /// each reflection is weighted by the product of `Ks` so far, and each surface it meets is
 /// shaded with direct light, indirect light from the VPLs when given (the subset and stride of
 /// interleaved sampling, `(0, 1)` for all), and its own reflection, while depth remains.
-pub fn reflected(
+#[cfg(test)]
+fn reflected(
     r: &Renderer,
     first: &SurfaceHit,
     shadowing: Option<&Shadowing>,
@@ -67,4 +213,63 @@ pub fn reflected(
 
 fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * d.dot(n) * n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{FrameStats, Indirect, Options};
+
+    /// The wavefront gives every pixel exactly the light of its own path traced alone, with
+    /// the same rays: maps with SMeRTS at mirror hits, VPL maps with interleaving, and rays.
+    #[test]
+    fn wavefront_equals_per_pixel_paths() {
+        let mut s =
+            crate::scene::load(&format!("{}/scenes/cornell-bunny-mirror.toml", env!("CARGO_MANIFEST_DIR")))
+                .expect("thesis scene");
+        s.settings.width = 80;
+        s.settings.height = 60;
+        let mut hybrid = Options::hybrid();
+        hybrid.shadow.map.resolution = 256;
+        hybrid.indirect = Indirect::Maps;
+        hybrid.indirect_opts.vpl.paths = 8;
+        hybrid.indirect_opts.map.resolution = 128;
+        hybrid.indirect_opts.interleave = 2;
+        let mut rays = Options::reference();
+        rays.indirect = Indirect::Rays;
+        rays.indirect_opts.vpl.paths = 8;
+        for o in [hybrid, rays] {
+            let r = Renderer::new(&s, o);
+            let mut stats = FrameStats::default();
+            let (g, _) = r.visibility();
+            let sh = (o.shadows != crate::render::Shadows::Rays).then(|| {
+                let mut sh = r.shadowing(&g, &mut stats);
+                sh.trace(&r, false);
+                sh
+            });
+            let v = r.vpls(&mut stats);
+            let mut out = vec![Vec3::ZERO; g.len()];
+            let c = run(&r, &g, sh.as_ref(), Some(&v), &mut out, &|| {});
+            let (w, k) = (80, o.indirect_opts.interleave as usize);
+            let mut c2 = RayCounts::default();
+            let mut mirrors = 0;
+            for (i, hit) in g.iter().enumerate() {
+                let Some(hit) = hit else { continue };
+                if r.scene.materials[r.scene.material[hit.tri as usize] as usize].ks == Vec3::ZERO {
+                    assert_eq!(out[i], Vec3::ZERO);
+                    continue;
+                }
+                mirrors += 1;
+                let first = SurfaceHit::new(r.scene, hit, r.camera_ray((i % w) as u32, (i / w) as u32).dir);
+                let alone = reflected(&r, &first, sh.as_ref(), Some((&v, Vpls::subset_of(i, w, k))), &mut c2);
+                assert_eq!(
+                    out[i].to_array().map(f32::to_bits),
+                    alone.to_array().map(f32::to_bits),
+                    "pixel {i}"
+                );
+            }
+            assert!(mirrors > 100, "{mirrors}");
+            assert_eq!(c, c2);
+        }
+    }
 }

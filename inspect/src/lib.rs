@@ -1,0 +1,16 @@
+//! hyrt-inspect: an egui window that shows why the hybrid renderer is fast and where it is
+//! wrong: the hybrid frame against the reference and their difference, per light the occlusion
+//! map, the shadow borders before and after dilation and where the selective rays went, rays
+//! per pixel by kind, the light and VPL depth maps, the plan and the frame's decisions, times
+//! per pass and rays by kind, pixel picking, and knobs that re-render.
+//!
+//! [`worker`] renders on a background thread, [`views`] turns buffers into images (pure
+//! functions), [`pick`] gathers what is known at one pixel, [`app`] is the window.
+
+pub mod app;
+pub mod pick;
+pub mod views;
+pub mod worker;
+
+pub use app::{Inspector, View};
+pub use worker::Setup;

@@ -1,0 +1,158 @@
+//! Pixel picking: what the renderer knew and did at one pixel (no window needed).
+
+use glam::Vec3;
+use hyrt::render::{
+    Shadows, SurfaceHit,
+    shadows::{RAY_NONE, facing},
+};
+use hyrt_shadowmap::{
+    EMPTY,
+    border::{LIT, NONE, SHADOW},
+    classify::{Classifier, Lookup},
+};
+use hyrt_tracer::RayCounts;
+
+use crate::worker::{Loaded, Rendered};
+
+/// Everything shown for a picked pixel.
+#[derive(Clone, Debug)]
+pub struct PixelInfo {
+    pub x: u32,
+    pub y: u32,
+    /// The camera hit (G-buffer), if any.
+    pub hit: Option<HitInfo>,
+    /// Linear radiance of the hybrid and the reference, and their display-luminance difference.
+    pub hybrid: Vec3,
+    pub reference: Vec3,
+    pub error: f32,
+    /// Rays cast on behalf of this pixel, by kind.
+    pub rays: Option<RayCounts>,
+    pub lights: Vec<LightPick>,
+}
+
+#[derive(Clone, Debug)]
+pub struct HitInfo {
+    pub tri: u32,
+    pub t: f32,
+    pub bary: [f32; 3],
+    pub p: Vec3,
+    pub material: String,
+    pub kd: Vec3,
+    pub ks: Vec3,
+}
+
+/// One light at the picked pixel.
+#[derive(Clone, Debug)]
+pub struct LightPick {
+    pub light: usize,
+    /// The light can add something here (in front of the surface, which has a diffuse
+    /// reflectance): a visibility decision is needed.
+    pub needed: bool,
+    /// Shadows by rays (no maps): every needed pixel casts one shadow ray.
+    pub by_rays: bool,
+    /// Map-based shadows: where the point falls in the light's map and what the map says.
+    pub map: Option<MapPick>,
+    /// The final decision (`LIT`, `SHADOW`, or `NONE`), from the frame's occlusion buffer.
+    pub decision: Option<u8>,
+    /// Border before dilation, and undecided (border after dilation: a ray was cast).
+    pub border: bool,
+    pub undecided: bool,
+    /// `RAY_NONE`, `RAY_HINT` or `RAY_TRAVERSAL`.
+    pub ray: u8,
+    /// With the visibility check: whether a ray contradicts the map's decision.
+    pub wrong: Option<bool>,
+}
+
+/// The texel a point read, as `map.coord(p - light.position)` and the classification.
+#[derive(Clone, Debug)]
+pub struct MapPick {
+    pub face: u8,
+    /// Continuous texel coordinates.
+    pub x: f32,
+    pub y: f32,
+    /// The texel's stored distance from the light (`inf`: empty) and triangle.
+    pub depth: f32,
+    pub id: u32,
+    /// The point's distance from the light.
+    pub distance: f32,
+    /// The map's own decision (before any ray): decision, hint, map-space border, ambiguity.
+    pub lookup: Lookup,
+}
+
+/// What is known at pixel `(x, y)` of `r`.
+pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
+    let scene = &loaded.scene;
+    let w = scene.settings.width;
+    let i = (y * w + x) as usize;
+    let hit = r.frame.gbuffer.as_ref().and_then(|g| g[i]);
+    let surf = hit.map(|h| SurfaceHit::new(scene, &h, loaded.camera.direction(x, y).normalize()));
+    let hit_info = hit.zip(surf).map(|(h, s)| {
+        let m = &scene.materials[scene.material[h.tri as usize] as usize];
+        HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.name.clone(), kd: m.kd, ks: m.ks }
+    });
+    let bufs = r.frame.shadows.as_ref();
+    let by_rays = r.options.shadows == Shadows::Rays;
+    let lights = scene
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(l, light)| {
+            let needed = surf.is_some_and(|s| {
+                scene.materials[scene.material[s.tri as usize] as usize].kd != Vec3::ZERO
+                    && facing(&s, light).is_some()
+            });
+            let map = r.maps.get(l).cloned().flatten().zip(surf).filter(|_| needed).map(|(m, s)| {
+                let c = m.coord(s.p - light.position);
+                let cls = Classifier { map: &m, planes: &loaded.planes[..], bias: r.options.shadow.bias };
+                let lookup = cls.classify_at(s.p, s.tri, c);
+                let [tx, ty] = lookup.texel;
+                MapPick {
+                    face: c.face,
+                    x: c.x,
+                    y: c.y,
+                    depth: m.depth(lookup.face, tx, ty),
+                    id: m.id(lookup.face, tx, ty),
+                    distance: (s.p - light.position).length(),
+                    lookup,
+                }
+            });
+            let at = |v: &Vec<Vec<bool>>| v.get(l).and_then(|b| b.get(i)).copied().unwrap_or(false);
+            LightPick {
+                light: l,
+                needed,
+                by_rays,
+                map,
+                decision: bufs.and_then(|b| b.occ.get(l)).map(|o| o[i]),
+                border: bufs.is_some_and(|b| at(&b.border)),
+                undecided: bufs.is_some_and(|b| at(&b.undecided)),
+                ray: bufs.and_then(|b| b.ray.get(l)).map_or(RAY_NONE, |v| v[i]),
+                wrong: bufs.filter(|b| !b.wrong.is_empty()).map(|b| at(&b.wrong)),
+            }
+        })
+        .collect();
+    PixelInfo {
+        x,
+        y,
+        hit: hit_info,
+        hybrid: r.frame.film.pixels[i],
+        reference: r.reference.film.pixels[i],
+        error: r.images.error[i],
+        rays: r.frame.pixel_rays.as_ref().map(|p| p[i]),
+        lights,
+    }
+}
+
+/// A decision's name.
+pub fn decision_name(d: u8) -> &'static str {
+    match d {
+        LIT => "lit",
+        SHADOW => "shadowed",
+        NONE => "none",
+        _ => "?",
+    }
+}
+
+/// A triangle id, or `empty`.
+pub fn tri_name(id: u32) -> String {
+    if id == EMPTY { "empty".into() } else { id.to_string() }
+}

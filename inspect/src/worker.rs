@@ -1,0 +1,541 @@
+//! The background thread that loads the scene and renders, so that the window never waits.
+//!
+//! It owns the [`Scene`] and one [`Renderer`]: every command first brings the renderer to the
+//! hybrid options with [`Renderer::set_options`] (which keeps the BVH and every map and VPL the
+//! change leaves valid, and says what it dropped), renders the reference only when its own
+//! options changed (the same renderer switched to rays everywhere: same BVH, same VPLs), then
+//! the hybrid frame with its inspection buffers (twice when the first frame built maps or VPLs,
+//! or ran the visibility check, whose rays are timed with the shadow rays: the time shown is
+//! that of a frame with warm caches and no check). Results, the images the views show, and
+//! progress (rows done of the passes' rows) go back to the window, which is woken by `notify`.
+//! Commands that pile up while a frame renders are coalesced: only the newest knobs render.
+
+use std::sync::{
+    Arc, Mutex,
+    atomic::{AtomicU64, Ordering::Relaxed},
+    mpsc::{Receiver, Sender, channel},
+};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use eframe::egui::ColorImage;
+use glam::Vec4;
+use hyrt::{
+    camera::CameraRays,
+    film::Film,
+    plan::Plan,
+    render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, Visibility, vpl::Vpl},
+    scene::Scene,
+};
+use hyrt_shadowmap::{LightMap, classify::triangle_planes};
+
+use crate::views::{self, RayKindView};
+
+/// Largest side of a light-map face image (maps are sampled down to it).
+pub const MAP_IMAGE_SIDE: u32 = 256;
+
+/// What to open, and how.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// A built-in scene name, a `.toml` scene file or a mesh file (as `hyrt render`).
+    pub scene: String,
+    pub size: Option<(u32, u32)>,
+    pub max_depth: Option<u32>,
+    /// The render flags (a missing `--preset` means the hybrid one here).
+    pub knobs: hyrt::cli::Knobs,
+    /// Override of the knobs' options (tests set small maps this way).
+    pub options: Option<Options>,
+}
+
+/// A scene loaded by the worker, shared with the window (for pixel picking).
+pub struct Loaded {
+    pub scene: Arc<Scene>,
+    pub camera: CameraRays,
+    /// Plane of every triangle: for re-classifying a picked pixel exactly as the renderer does.
+    pub planes: Arc<Vec<Vec4>>,
+    /// The options the flags selected: the knobs' starting values.
+    pub options: Options,
+    pub load_ms: f64,
+}
+
+/// The reference frame, rendered again only when its options change.
+pub struct Reference {
+    pub options: Options,
+    pub film: Film,
+    pub stats: FrameStats,
+    pub image: ColorImage,
+}
+
+/// The images of a frame's views, made on the worker thread.
+pub struct Images {
+    pub hybrid: ColorImage,
+    /// Per pixel, the display-luminance difference to the reference.
+    pub error: Vec<f32>,
+    pub error_heat: ColorImage,
+    /// With the visibility check: the pixels where some light's map decision is wrong.
+    pub wrong: Option<ColorImage>,
+    /// Per light (map-based shadows with kept buffers): occlusion, border before dilation,
+    /// undecided (border after dilation: the pixels that cast a ray), ray outcomes.
+    pub lights: Vec<LightImages>,
+    /// Per ray kind, the heat map and its maximum per pixel.
+    pub rays: Vec<(RayKindView, ColorImage, u64)>,
+    /// Per point light with a map: one image per face (`None`: not drawn) and the depth range.
+    pub maps: Vec<Option<MapImages>>,
+}
+
+pub struct LightImages {
+    pub occlusion: ColorImage,
+    pub border: ColorImage,
+    pub undecided: ColorImage,
+    pub rays: ColorImage,
+}
+
+pub struct MapImages {
+    pub faces: Vec<Option<ColorImage>>,
+    pub range: Option<(f32, f32)>,
+}
+
+/// One rendered frame with everything the views show.
+pub struct Rendered {
+    /// The number of the render command this answers.
+    pub generation: u64,
+    pub options: Options,
+    /// What [`Renderer::set_options`] dropped for these knobs.
+    pub dropped: Vec<&'static str>,
+    pub plan: Plan,
+    pub frame: Frame,
+    pub reference: Arc<Reference>,
+    /// When this command built light maps or VPLs: the stats of that first frame (`frame` is
+    /// then a second one, with the caches warm).
+    pub first_frame: Option<FrameStats>,
+    /// Whether the reference was rendered for this command (else reused).
+    pub reference_rendered: bool,
+    pub psnr: f64,
+    /// With the visibility check: pixels with at least one wrong map decision.
+    pub wrong_pixels: Option<u64>,
+    /// The point lights' maps (map-based shadows).
+    pub maps: Vec<Option<Arc<LightMap>>>,
+    pub vpls: Vec<Vpl>,
+    /// Number of VPL maps (0 unless `Indirect::Maps`).
+    pub vpl_maps: usize,
+    pub bvh_ms: f64,
+    pub images: Images,
+    /// Wall time of the command, reference and images included.
+    pub wall_ms: f64,
+}
+
+/// A VPL's map, as an image.
+pub struct VplMap {
+    pub index: usize,
+    pub image: Option<ColorImage>,
+    pub range: Option<(f32, f32)>,
+    pub resolution: u32,
+}
+
+pub enum Command {
+    /// Render the hybrid frame with these options (and the reference, if its options changed).
+    /// A worker whose window is gone stops when the channel closes (after its current frame).
+    Render { generation: u64, options: Options },
+    /// The image of VPL `index`'s map.
+    VplMap(usize),
+}
+
+pub enum Reply {
+    Loaded(Box<Loaded>),
+    /// The scene could not be loaded (the message has the causes).
+    Failed(String),
+    Rendered(Box<Rendered>),
+    VplMap(Box<VplMap>),
+}
+
+/// Progress of the current command: a stage name and rows done of the rows expected.
+#[derive(Default)]
+pub struct Progress {
+    stage: Mutex<String>,
+    done: AtomicU64,
+    total: AtomicU64,
+}
+
+impl Progress {
+    fn start(&self, stage: &str, total: u64) {
+        *self.stage.lock().unwrap_or_else(|e| e.into_inner()) = stage.to_string();
+        self.done.store(0, Relaxed);
+        self.total.store(total, Relaxed);
+    }
+
+    /// The stage and the fraction done (0 when unknown).
+    pub fn get(&self) -> (String, f32) {
+        let stage = self.stage.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let (done, total) = (self.done.load(Relaxed), self.total.load(Relaxed));
+        (stage, if total == 0 { 0.0 } else { (done as f32 / total as f32).min(1.0) })
+    }
+}
+
+/// The handle the window keeps.
+pub struct Worker {
+    tx: Sender<Command>,
+    rx: Receiver<Reply>,
+    pub progress: Arc<Progress>,
+    /// Not joined when the window closes: that must not wait for a long render.
+    _thread: JoinHandle<()>,
+}
+
+impl Worker {
+    /// Starts the thread: it loads the scene at once and answers with [`Reply::Loaded`] or
+    /// [`Reply::Failed`]; `notify` is called after every reply and now and then during a render.
+    pub fn spawn(setup: Setup, notify: impl Fn() + Send + Sync + 'static) -> Self {
+        let (tx, commands) = channel();
+        let (replies, rx) = channel();
+        let progress = Arc::new(Progress::default());
+        let p = progress.clone();
+        let thread = std::thread::Builder::new()
+            .name("hyrt-inspect worker".into())
+            .spawn(move || run(setup, commands, replies, &p, &notify))
+            .expect("cannot start the worker thread");
+        Self { tx, rx, progress, _thread: thread }
+    }
+
+    pub fn send(&self, c: Command) {
+        // A worker that stopped (failed load) ignores commands.
+        let _ = self.tx.send(c);
+    }
+
+    pub fn try_recv(&self) -> Option<Reply> {
+        // Empty, or disconnected (the worker stopped after a failed load): nothing.
+        self.rx.try_recv().ok()
+    }
+}
+
+/// Loads the scene with the setup's size and depth overrides, validated, and the options.
+pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
+    let mut scene = hyrt::scene::load(&setup.scene)?;
+    if let Some((w, h)) = setup.size {
+        scene.settings.width = w;
+        scene.settings.height = h;
+    }
+    if let Some(d) = setup.max_depth {
+        scene.settings.max_depth = d;
+    }
+    scene.validate()?;
+    let mut knobs = setup.knobs.clone();
+    knobs.preset = knobs.preset.or(Some(hyrt::cli::PresetArg::Hybrid));
+    let mut options = match setup.options {
+        Some(o) => o,
+        None => knobs.options_for(&scene)?,
+    };
+    options.keep_buffers = true;
+    // Wrong-visibility counts cost a shadow ray per map decision (untimed): on by default up
+    // to the thesis's 640x480.
+    let pixels = u64::from(scene.settings.width) * u64::from(scene.settings.height);
+    options.check_visibility |= setup.options.is_none() && pixels <= 640 * 480;
+    Ok((scene, options))
+}
+
+/// The reference for hybrid options `o`: rays everywhere, with the same VPLs (by rays, every
+/// VPL at every pixel: no interleaving) when the hybrid has indirect light. The map and VPL-map
+/// knobs stay the hybrid's, unused, so that switching the renderer between the two drops no
+/// cache.
+pub fn reference_options(o: &Options) -> Options {
+    let mut r = Options {
+        visibility: Visibility::Rays,
+        shadows: Shadows::Rays,
+        indirect: if o.indirect == Indirect::None { Indirect::None } else { Indirect::Rays },
+        check_visibility: false,
+        keep_buffers: false,
+        ..*o
+    };
+    r.indirect_opts.interleave = 1;
+    r
+}
+
+/// Whether two reference options (of [`reference_options`]) render the same image: only the
+/// indirect light and its VPLs matter (the map knobs are unused by rays).
+pub fn same_reference(a: &Options, b: &Options) -> bool {
+    let (x, y) = (&a.indirect_opts, &b.indirect_opts);
+    a.indirect == b.indirect && (a.indirect == Indirect::None || (x.vpl == y.vpl && x.clamp == y.clamp))
+}
+
+fn run(
+    setup: Setup,
+    commands: Receiver<Command>,
+    replies: Sender<Reply>,
+    progress: &Progress,
+    notify: &(dyn Fn() + Send + Sync),
+) {
+    let reply = |r: Reply| {
+        let _ = replies.send(r);
+        notify();
+    };
+    let t = Instant::now();
+    progress.start(&format!("loading {}", setup.scene), 0);
+    notify();
+    let (scene, options) = match load(&setup) {
+        Ok(s) => s,
+        Err(e) => return reply(Reply::Failed(format!("{e:#}"))),
+    };
+    let scene = Arc::new(scene);
+    let cam = scene.camera.expect("validated scene has a camera");
+    let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
+    let planes = Arc::new(triangle_planes(&scene.positions));
+    reply(Reply::Loaded(Box::new(Loaded {
+        scene: scene.clone(),
+        camera,
+        planes,
+        options,
+        load_ms: t.elapsed().as_secs_f64() * 1e3,
+    })));
+
+    progress.start(&format!("building the BVH of {} triangles", scene.triangle_count()), 0);
+    notify();
+    let mut renderer = Renderer::new(&scene, options);
+    let mut reference: Option<Arc<Reference>> = None;
+    while let Ok(first) = commands.recv() {
+        let (newest, maps) = coalesce(std::iter::once(first).chain(commands.try_iter()));
+        if let Some((generation, options)) = newest {
+            let r = render(&mut renderer, &mut reference, generation, options, progress, notify);
+            reply(Reply::Rendered(Box::new(r)));
+        }
+        for i in maps {
+            reply(Reply::VplMap(Box::new(vpl_map(&renderer, i))));
+        }
+    }
+}
+
+/// The commands waiting: only the newest render matters (knobs dragged while a frame renders
+/// queue up); map requests are all answered, in order, after it.
+pub fn coalesce(commands: impl Iterator<Item = Command>) -> (Option<(u64, Options)>, Vec<usize>) {
+    let (mut newest, mut maps) = (None, Vec::new());
+    for cmd in commands {
+        match cmd {
+            Command::Render { generation, options } => newest = Some((generation, options)),
+            Command::VplMap(i) => maps.push(i),
+        }
+    }
+    (newest, maps)
+}
+
+fn render(
+    renderer: &mut Renderer,
+    reference: &mut Option<Arc<Reference>>,
+    generation: u64,
+    mut options: Options,
+    progress: &Progress,
+    notify: &(dyn Fn() + Send + Sync),
+) -> Rendered {
+    let start = Instant::now();
+    options.keep_buffers = true;
+    let scene = renderer.scene;
+    let (w, h) = (scene.settings.width, scene.settings.height);
+    let exposure = scene.settings.exposure;
+    let dropped = renderer.set_options(options);
+    // Progress: rows of every pass, and a repaint every eighth of a pass.
+    let rows = |passes: u32, stage: &str| progress.start(stage, u64::from(h) * u64::from(passes));
+    let step = (u64::from(h) / 8).max(1);
+    let tick = || {
+        let d = progress.done.fetch_add(1, Relaxed) + 1;
+        if d.is_multiple_of(step) {
+            notify();
+        }
+    };
+
+    let ref_opts = reference_options(&options);
+    let reference_rendered = reference.as_ref().is_none_or(|r| !same_reference(&r.options, &ref_opts));
+    if reference_rendered {
+        renderer.set_options(ref_opts);
+        rows(renderer.progress_passes(), "rendering the reference");
+        let f = renderer.render(&tick);
+        let image = views::film_image(&f.film, exposure);
+        *reference = Some(Arc::new(Reference { options: ref_opts, film: f.film, stats: f.stats, image }));
+        renderer.set_options(options);
+    }
+    let reference = reference.clone().expect("rendered above");
+
+    rows(renderer.progress_passes(), "rendering the hybrid frame");
+    let mut frame = renderer.render(&tick);
+    // The frame whose time is shown has warm caches and no visibility check (its rays run in
+    // the timed shadow-ray pass): render again if this one built maps or VPLs, or checked.
+    let built = frame.stats.maps_built > 0
+        || frame.stats.decisions.iter().any(|d| d.run && (d.what == "vpls" || d.what == "vpl_maps"));
+    let mut first_frame = None;
+    if built || options.check_visibility {
+        renderer.set_options(Options { check_visibility: false, ..options });
+        rows(renderer.progress_passes(), "rendering the hybrid frame again (timed: caches warm, no check)");
+        let mut timed = renderer.render(&tick);
+        if options.check_visibility {
+            // The same decisions (the check only compares): take its verdicts over.
+            for (t, c) in timed.stats.lights.iter_mut().zip(&frame.stats.lights) {
+                t.wrong = c.wrong;
+            }
+            if let (Some(t), Some(c)) = (timed.shadows.as_mut(), frame.shadows.as_mut()) {
+                debug_assert_eq!(t.occ, c.occ);
+                t.wrong = std::mem::take(&mut c.wrong);
+            }
+        }
+        if built {
+            first_frame = Some(frame.stats);
+        }
+        frame = timed;
+    }
+    progress.start("making the views", 0);
+    notify();
+    let psnr = hyrt::measure::psnr(scene, &reference.film, &frame.film).unwrap_or(f64::NAN);
+    let wrong_pixels = frame.shadows.as_ref().filter(|b| !b.wrong.is_empty()).map(|b| {
+        (0..frame.film.pixels.len())
+            .filter(|&i| b.wrong.iter().any(|l| l.get(i).copied().unwrap_or(false)))
+            .count() as u64
+    });
+    let maps: Vec<Option<Arc<LightMap>>> = if options.shadows == Shadows::Rays {
+        vec![None; scene.lights.len()]
+    } else {
+        (0..scene.lights.len()).map(|l| renderer.light_map(l)).collect()
+    };
+    let (vpls, vpl_maps) = renderer.cached_vpls().map_or((Vec::new(), 0), |(v, m)| (v.to_vec(), m.len()));
+    let images = images(&frame, &reference, &maps, exposure, w, h);
+    Rendered {
+        generation,
+        options,
+        dropped,
+        plan: renderer.plan.clone(),
+        frame,
+        reference,
+        first_frame,
+        reference_rendered,
+        psnr,
+        wrong_pixels,
+        maps,
+        vpls,
+        vpl_maps,
+        bvh_ms: renderer.bvh_build_ms(),
+        images,
+        wall_ms: start.elapsed().as_secs_f64() * 1e3,
+    }
+}
+
+/// Every image of the frame's views.
+fn images(
+    frame: &Frame,
+    reference: &Reference,
+    maps: &[Option<Arc<LightMap>>],
+    exposure: f32,
+    w: u32,
+    h: u32,
+) -> Images {
+    let error = views::luminance_error(&frame.film, &reference.film, exposure);
+    let back = views::backdrop(&frame.film, exposure);
+    let lights = frame.shadows.as_ref().map_or_else(Vec::new, |b| {
+        (0..b.occ.len())
+            .map(|l| {
+                let empty = Vec::new();
+                let get = |v: &'_ Vec<Vec<bool>>| v.get(l).map_or(&empty[..], |x| &x[..]).to_vec();
+                let undecided = get(&b.undecided);
+                LightImages {
+                    occlusion: views::occlusion_image(&b.occ[l], &undecided, &get(&b.wrong), w, h),
+                    border: views::mask_image(&get(&b.border), &back, w, h),
+                    undecided: views::mask_image(&undecided, &back, w, h),
+                    rays: views::ray_image(b.ray.get(l).map_or(&[][..], |r| &r[..]), &b.occ[l], &back, w, h),
+                }
+            })
+            .collect()
+    });
+    let rays = frame.pixel_rays.as_ref().map_or_else(Vec::new, |px| {
+        RayKindView::ALL
+            .iter()
+            .map(|&k| {
+                let (img, max) = views::ray_heat(px, k, w, h);
+                (k, img, max)
+            })
+            .collect()
+    });
+    let maps = maps
+        .iter()
+        .map(|m| {
+            m.as_ref().map(|m| {
+                let range = views::depth_range(m, MAP_IMAGE_SIDE);
+                let r = range.unwrap_or((1.0, 2.0));
+                let faces =
+                    (0..m.faces() as u8).map(|f| views::depth_face_image(m, f, MAP_IMAGE_SIDE, r)).collect();
+                MapImages { faces, range }
+            })
+        })
+        .collect();
+    let wrong = frame.shadows.as_ref().filter(|b| !b.wrong.is_empty()).map(|b| {
+        let any: Vec<bool> =
+            (0..back.len()).map(|i| b.wrong.iter().any(|l| l.get(i).copied().unwrap_or(false))).collect();
+        views::mask_image_in(&any, &back, w, h, views::WRONG_COLOR)
+    });
+    Images {
+        hybrid: views::film_image(&frame.film, exposure),
+        wrong,
+        error_heat: views::error_heat(&error, w, h),
+        error,
+        lights,
+        rays,
+        maps,
+    }
+}
+
+fn vpl_map(renderer: &Renderer, index: usize) -> VplMap {
+    let map = renderer.cached_vpls().and_then(|(_, maps)| maps.get(index));
+    let range = map.and_then(|m| views::depth_range(m, MAP_IMAGE_SIDE));
+    let image = map.and_then(|m| views::depth_face_image(m, 0, MAP_IMAGE_SIDE, range.unwrap_or((1.0, 2.0))));
+    VplMap { index, image, range, resolution: map.map_or(0, |m| m.resolution()) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn progress_is_rows_done_of_the_stage() {
+        let p = Progress::default();
+        assert_eq!(p.get(), (String::new(), 0.0));
+        p.start("rendering", 4);
+        p.done.fetch_add(1, Relaxed);
+        assert_eq!(p.get(), ("rendering".to_string(), 0.25));
+        p.done.fetch_add(9, Relaxed);
+        assert_eq!(p.get().1, 1.0, "clamped");
+        p.start("making the views", 0);
+        assert_eq!(p.get(), ("making the views".to_string(), 0.0));
+    }
+
+    #[test]
+    fn queued_renders_coalesce_to_the_newest() {
+        let o = Options::hybrid();
+        let mut p = o;
+        p.shadow.bias = 3.0;
+        let cmds = vec![
+            Command::Render { generation: 1, options: o },
+            Command::VplMap(4),
+            Command::Render { generation: 2, options: p },
+            Command::VplMap(2),
+        ];
+        let (newest, maps) = coalesce(cmds.into_iter());
+        assert_eq!(newest, Some((2, p)));
+        assert_eq!(maps, vec![4, 2]);
+        assert_eq!(coalesce(std::iter::once(Command::VplMap(1))), (None, vec![1]));
+    }
+
+    #[test]
+    fn the_reference_ignores_the_map_knobs() {
+        let mut h = Options::hybrid();
+        h.indirect = Indirect::Maps;
+        h.indirect_opts.interleave = 4;
+        let r = reference_options(&h);
+        assert_eq!((r.visibility, r.shadows, r.indirect), (Visibility::Rays, Shadows::Rays, Indirect::Rays));
+        assert_eq!(r.indirect_opts.interleave, 1, "the reference evaluates every VPL");
+        // The caches' keys are the hybrid's: switching between the two drops nothing.
+        assert_eq!(
+            (r.shadow.map, r.indirect_opts.map, r.indirect_opts.vpl),
+            (h.shadow.map, h.indirect_opts.map, h.indirect_opts.vpl)
+        );
+        let mut h2 = h;
+        h2.shadow.bias = 3.0;
+        h2.shadow.map.resolution = 64;
+        h2.indirect_opts.map.resolution = 64;
+        assert!(same_reference(&r, &reference_options(&h2)));
+        h2.indirect_opts.vpl.paths += 1;
+        assert!(!same_reference(&r, &reference_options(&h2)));
+        h2.indirect = Indirect::None;
+        assert!(!same_reference(&r, &reference_options(&h2)));
+    }
+}

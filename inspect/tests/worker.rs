@@ -1,0 +1,175 @@
+//! The worker and the pixel picking, without a window: frames, caches kept across knob changes,
+//! and what a picked pixel shows against the frame's own buffers.
+
+use std::time::{Duration, Instant};
+
+use hyrt::render::{Indirect, Options, shadows::RAY_NONE};
+use hyrt_inspect::{
+    Setup, pick,
+    worker::{Command, Rendered, Reply, Worker},
+};
+use hyrt_shadowmap::border::NONE;
+
+fn setup(options: Options) -> Setup {
+    Setup {
+        scene: "cornell".into(),
+        size: Some((96, 72)),
+        max_depth: None,
+        knobs: Default::default(),
+        options: Some(options),
+    }
+}
+
+fn small_hybrid() -> Options {
+    let mut o = Options::hybrid();
+    o.shadow.map.resolution = 256;
+    o.check_visibility = true;
+    o
+}
+
+/// The next reply, waiting at most a minute.
+fn next(w: &Worker) -> Reply {
+    let start = Instant::now();
+    loop {
+        if let Some(r) = w.try_recv() {
+            return r;
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "the worker did not answer");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+fn rendered(w: &Worker) -> Box<Rendered> {
+    match next(w) {
+        Reply::Rendered(r) => r,
+        Reply::Failed(e) => panic!("failed: {e}"),
+        _ => panic!("expected a frame"),
+    }
+}
+
+#[test]
+fn renders_and_keeps_what_a_change_leaves_valid() {
+    let w = Worker::spawn(setup(small_hybrid()), || {});
+    let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
+    assert_eq!(loaded.scene.name, "cornell");
+    assert_eq!((loaded.scene.settings.width, loaded.scene.settings.height), (96, 72));
+    assert_eq!(loaded.options.shadow.map.resolution, 256);
+    assert!(loaded.options.keep_buffers);
+
+    w.send(Command::Render { generation: 1, options: loaded.options });
+    let a = rendered(&w);
+    assert_eq!(a.generation, 1);
+    assert!(a.reference_rendered);
+    assert!(a.psnr > 30.0, "{}", a.psnr);
+    assert_eq!(a.images.hybrid.size, [96, 72]);
+    assert_eq!(a.images.error.len(), 96 * 72);
+    assert_eq!(a.images.lights.len(), loaded.scene.lights.len());
+    assert_eq!(a.images.rays.len(), 6);
+    assert!(a.maps.iter().all(|m| m.as_ref().is_some_and(|m| m.resolution() == 256)));
+    // The first frame built the maps; the frame shown is a second one, with warm caches and
+    // the visibility check's verdicts carried over from the first.
+    assert!(a.first_frame.as_ref().is_some_and(|f| f.maps_built > 0));
+    assert_eq!(a.frame.stats.maps_built, 0);
+    assert!(a.wrong_pixels.is_some());
+    assert!(a.frame.stats.lights.iter().all(|l| l.wrong.is_some()));
+    assert_eq!(a.frame.shadows.as_ref().expect("kept").wrong.len(), loaded.scene.lights.len());
+    assert_eq!(a.reference.stats.rays.primary, 96 * 72);
+    assert_eq!(a.frame.stats.rays.primary, 0, "raster visibility");
+
+    // A new bias rebuilds nothing, and the reference is reused.
+    let mut o = loaded.options;
+    o.shadow.bias = 2.0;
+    w.send(Command::Render { generation: 2, options: o });
+    let b = rendered(&w);
+    assert_eq!(b.generation, 2);
+    assert!(b.dropped.is_empty(), "{:?}", b.dropped);
+    assert!(!b.reference_rendered);
+    assert_eq!(b.frame.stats.maps_built, 0);
+    assert!(b.first_frame.is_none(), "nothing was built");
+    assert!(b.wrong_pixels.is_some(), "still checked");
+    assert_eq!(b.reference.film, a.reference.film);
+
+    // A new resolution rebuilds the light maps only. Two commands in a row: the second may
+    // be coalesced with the first (if it queued while the first rendered), or render after it.
+    o.shadow.map.resolution = 128;
+    w.send(Command::Render { generation: 3, options: o });
+    o.shadow.map.resolution = 512;
+    w.send(Command::Render { generation: 4, options: o });
+    let mut c = rendered(&w);
+    if c.generation == 3 {
+        assert_eq!(c.dropped, vec!["light maps"]);
+        c = rendered(&w);
+    }
+    assert_eq!(c.generation, 4);
+    assert_eq!(c.dropped, vec!["light maps"]);
+    assert!(c.first_frame.as_ref().is_some_and(|f| f.maps_built > 0));
+    assert!(c.maps.iter().flatten().all(|m| m.resolution() == 512));
+
+    // Indirect light: VPLs, their maps on request, and a reference with the same VPLs by rays.
+    o.indirect = Indirect::Maps;
+    o.indirect_opts.vpl.paths = 6;
+    o.indirect_opts.map.resolution = 128;
+    w.send(Command::Render { generation: 5, options: o });
+    w.send(Command::VplMap(1));
+    let d = rendered(&w);
+    assert!(d.reference_rendered);
+    assert_eq!(d.reference.options.indirect, Indirect::Rays);
+    assert!(d.reference.stats.rays.vpl_shadow > 0);
+    assert!(!d.vpls.is_empty());
+    assert_eq!(d.vpl_maps, d.vpls.len());
+    let Reply::VplMap(m) = next(&w) else { panic!("expected a VPL map") };
+    assert_eq!((m.index, m.resolution), (1, 128));
+    assert!(m.image.is_some() && m.range.is_some());
+}
+
+#[test]
+fn a_missing_scene_is_an_error_reply() {
+    let mut s = setup(small_hybrid());
+    s.scene = "no-such-dir/missing.toml".into();
+    let w = Worker::spawn(s, || {});
+    match next(&w) {
+        Reply::Failed(e) => assert!(e.contains("missing.toml"), "{e}"),
+        _ => panic!("expected a failure"),
+    }
+}
+
+/// Every picked pixel agrees with the frame's buffers: the G-buffer's triangle, the map's own
+/// decision wherever no ray was cast (re-classified from the texel the pick reports), a ray
+/// exactly where the frame cast one.
+#[test]
+fn picking_agrees_with_the_frame_buffers() {
+    let w = Worker::spawn(setup(small_hybrid()), || {});
+    let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
+    w.send(Command::Render { generation: 1, options: loaded.options });
+    let r = rendered(&w);
+    let g = r.frame.gbuffer.as_ref().expect("kept");
+    let b = r.frame.shadows.as_ref().expect("kept");
+    let (mut decided, mut rays) = (0, 0);
+    for y in 0..72 {
+        for x in 0..96 {
+            let i = (y * 96 + x) as usize;
+            let p = pick::pick(&loaded, &r, x, y);
+            assert_eq!(p.hit.as_ref().map(|h| h.tri), g[i].map(|h| h.tri), "({x}, {y})");
+            assert_eq!(p.rays, Some(r.frame.pixel_rays.as_ref().expect("kept")[i]));
+            for lp in &p.lights {
+                let l = lp.light;
+                assert_eq!(lp.decision, Some(b.occ[l][i]));
+                assert_eq!(lp.needed, b.occ[l][i] != NONE, "({x}, {y}) light {l}");
+                let Some(m) = &lp.map else { continue };
+                assert_eq!(m.lookup.map_border, b.map_border[l][i]);
+                assert_eq!(m.lookup.hint, b.hint[l][i]);
+                assert_eq!(m.face, m.lookup.face);
+                assert_eq!([m.x as u32, m.y as u32], m.lookup.texel);
+                if lp.undecided {
+                    assert_ne!(lp.ray, RAY_NONE);
+                    rays += 1;
+                } else {
+                    assert_eq!(lp.ray, RAY_NONE);
+                    assert_eq!(m.lookup.decision, b.occ[l][i], "({x}, {y}) light {l}");
+                    decided += 1;
+                }
+            }
+        }
+    }
+    assert!(decided > 1000 && rays > 10, "{decided} {rays}");
+}

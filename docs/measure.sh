@@ -1,10 +1,11 @@
 #!/bin/sh
 # Regenerates the measurements committed under docs/: the thesis tables (docs/bench/) and one
 # accuracy-vs-time sweep per thesis scene (docs/sweeps/). Run from the project root on a quiet
-# machine, after `cargo build --release`; about 30 minutes on 2 cores.
+# machine, after `cargo build --release`: `sh docs/measure.sh` (about 30 minutes on 2 cores), or
+# `sh docs/measure.sh sweeps` for the sweeps alone.
 set -e
 H=./target/release/hyrt
-$H bench --runs 10 --out docs/bench
+[ "${1:-}" = sweeps ] || $H bench --runs 10 --out docs/bench
 $H sweep scenes/cornell-bunny-mirror.toml --runs 5 --out docs/sweeps/cornell-bunny-mirror \
   --knob shadow-map=cube,paraboloid --knob shadow-map-res=256,512,1024,2048 --knob borders=laplacian,depth,both
 $H sweep scenes/office.toml --runs 5 --out docs/sweeps/office --base "--preset hybrid --shadow-map paraboloid" \

@@ -18,9 +18,13 @@
 //! divan prints input triangles per second (`item/s`) beside the time per frame.
 //! Run with `cargo bench -p hyrt-raster`.
 
+#[path = "../../benches/synthetic/mod.rs"]
+mod synthetic;
+
 use divan::Bencher;
 use glam::{Mat4, Vec3, Vec4};
 use hyrt_raster::{RasterOptions, Rasterizer, Target};
+use synthetic::Rng;
 
 const WIDTH: u32 = 640;
 const HEIGHT: u32 = 480;
@@ -34,18 +38,6 @@ fn camera(eye: Vec3, target: Vec3) -> Mat4 {
     let aspect = WIDTH as f32 / HEIGHT as f32;
     let proj = glam::camera::rh::proj::directx::perspective_infinite_reverse(60f32.to_radians(), aspect, 0.1);
     proj * glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y)
-}
-
-/// A deterministic PRNG (xorshift64*), uniform in `[0, 1)`.
-struct Rng(u64);
-
-impl Rng {
-    fn f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-    }
 }
 
 fn transform(view_proj: &Mat4, world: &[[Vec3; 3]]) -> Vec<[Vec4; 3]> {

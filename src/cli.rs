@@ -380,7 +380,8 @@ pub struct CompareArgs {
     pub json: bool,
 }
 
-pub(crate) fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+/// Parses `WxH` (e.g. `640x480`) for clap.
+pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, e.g. 640x480, got '{s}'"))?;
     let p =
         |v: &str| v.trim().parse::<u32>().map_err(|_| format!("expected WxH with whole numbers, got '{s}'"));

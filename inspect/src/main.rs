@@ -1,7 +1,7 @@
 //! `hyrt-inspect [SCENE] [--size WxH] [--max-depth N] [render flags]`: the inspector window.
 
 use clap::Parser;
-use hyrt::cli::Knobs;
+use hyrt::cli::{Knobs, parse_size};
 use hyrt_inspect::{Inspector, Setup};
 
 /// hyrt-inspect: see why the hybrid renderer is fast and where it is wrong.
@@ -24,13 +24,6 @@ struct Args {
     max_depth: Option<u32>,
     #[command(flatten)]
     knobs: Knobs,
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, e.g. 640x480, got '{s}'"))?;
-    let p =
-        |v: &str| v.trim().parse::<u32>().map_err(|_| format!("expected WxH with whole numbers, got '{s}'"));
-    Ok((p(w)?, p(h)?))
 }
 
 fn main() -> eframe::Result {

@@ -26,7 +26,6 @@ use crate::{
     cli::Knobs,
     film::atomic_write,
     measure::{self, Config, MeasureOptions, Measurement},
-    scene,
 };
 
 /// Arguments of `hyrt bench`.
@@ -146,13 +145,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
     // Everything that can fail before hours of rendering: scenes, flags, the output folder.
     let mut loaded = Vec::new();
     for s in &scenes {
-        let mut sc = scene::load(s)?;
-        if let Some((w, h)) = a.size {
-            sc.settings.width = w;
-            sc.settings.height = h;
-        }
-        sc.validate().with_context(|| s.clone())?;
-        loaded.push(sc);
+        loaded.push(crate::cli::load_scene(s, a.size, None, None)?);
     }
     let flags = configs(a.vpls);
     let mut per_scene = Vec::new();

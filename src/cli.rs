@@ -388,6 +388,25 @@ pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((p(w)?, p(h)?))
 }
 
+/// Loads a scene (a built-in name, a scene file or a mesh file) with the command line's
+/// overrides of its image size, mirror depth and exposure, and validates the result.
+pub fn load_scene(
+    name: &str,
+    size: Option<(u32, u32)>,
+    max_depth: Option<u32>,
+    exposure: Option<f32>,
+) -> Result<scene::Scene> {
+    let mut scene = scene::load(name)?;
+    let s = &mut scene.settings;
+    if let Some((w, h)) = size {
+        (s.width, s.height) = (w, h);
+    }
+    s.max_depth = max_depth.unwrap_or(s.max_depth);
+    s.exposure = exposure.unwrap_or(s.exposure);
+    scene.validate()?;
+    Ok(scene)
+}
+
 /// Runs the CLI on parsed arguments.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
@@ -414,18 +433,7 @@ fn render(a: &RenderArgs) -> Result<()> {
             eprintln!("{s}");
         }
     };
-    let mut scene = scene::load(&a.scene)?;
-    if let Some((w, h)) = a.size {
-        scene.settings.width = w;
-        scene.settings.height = h;
-    }
-    if let Some(d) = a.max_depth {
-        scene.settings.max_depth = d;
-    }
-    if let Some(e) = a.exposure {
-        scene.settings.exposure = e;
-    }
-    scene.validate()?;
+    let scene = load_scene(&a.scene, a.size, a.max_depth, a.exposure)?;
     let png = match (&a.output, &a.exr) {
         (Some(p), _) => Some(p.clone()),
         (None, Some(_)) => None,
@@ -533,15 +541,7 @@ fn compare(a: &CompareArgs) -> Result<()> {
 
 /// `hyrt plan`: the static plan, and with `--frames` what two frames actually did.
 fn plan(a: &PlanArgs) -> Result<()> {
-    let mut scene = scene::load(&a.scene)?;
-    if let Some((w, h)) = a.size {
-        scene.settings.width = w;
-        scene.settings.height = h;
-    }
-    if let Some(d) = a.max_depth {
-        scene.settings.max_depth = d;
-    }
-    scene.validate()?;
+    let scene = load_scene(&a.scene, a.size, a.max_depth, None)?;
     let options = a.knobs.options_for(&scene)?;
     if !a.frames {
         let plan = crate::plan::Plan::new(&scene, &options);

@@ -42,7 +42,7 @@ use crate::{
     metrics::{DisplayImage, flip_mean},
     plot,
     render::{Indirect, Options, Shadows},
-    scene::{self, Scene},
+    scene::Scene,
 };
 
 /// `hyrt sweep` arguments.
@@ -230,12 +230,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
             bail!("knob '{}' is also set in --base '{}': set it in one place only", k.name, a.base);
         }
     }
-    let mut scene = scene::load(&a.scene)?;
-    if let Some((w, h)) = a.size {
-        scene.settings.width = w;
-        scene.settings.height = h;
-    }
-    scene.validate()?;
+    let scene = crate::cli::load_scene(&a.scene, a.size, None, None)?;
     let options_of = |flags: &[String]| -> Result<Options> { Knobs::from_flags(flags)?.options_for(&scene) };
     options_of(&base).map_err(|e| anyhow!("--base '{}': {}", a.base, flag_error(&e)))?;
     for k in &knobs {

@@ -208,15 +208,7 @@ impl Worker {
 
 /// Loads the scene with the setup's size and depth overrides, validated, and the options.
 pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
-    let mut scene = hyrt::scene::load(&setup.scene)?;
-    if let Some((w, h)) = setup.size {
-        scene.settings.width = w;
-        scene.settings.height = h;
-    }
-    if let Some(d) = setup.max_depth {
-        scene.settings.max_depth = d;
-    }
-    scene.validate()?;
+    let scene = hyrt::cli::load_scene(&setup.scene, setup.size, setup.max_depth, None)?;
     let mut knobs = setup.knobs.clone();
     knobs.preset = knobs.preset.or(Some(hyrt::cli::PresetArg::Hybrid));
     let mut options = match setup.options {

@@ -240,4 +240,18 @@ fn cluster_culling_and_buffer_reuse_change_no_pixel() {
     let differ = g.iter().zip(&all.id).filter(|(h, i)| id(h) != **i).count();
     assert_eq!(differ, 0, "culling changed {differ} pixels");
     assert!(r.visibility().0 == g, "the second frame differs");
+    // Frames reuse the last G-buffer without clearing it: every pixel must be overwritten.
+    r.recycle_gbuffer(vec![Some(Hit { t: 1.0, tri: 7, bary: [0.25, 0.25, 0.5] }); g.len()]);
+    assert!(r.visibility().0 == g, "a recycled G-buffer's old contents leaked into the frame");
+}
+
+/// The ray-cast G-buffer, too, overwrites every pixel of a recycled one (misses included).
+#[test]
+fn recycled_gbuffer_is_overwritten_by_rays() {
+    let scene = hyrt::scene::load("cornell").unwrap();
+    let r = Renderer::new(&scene, Options::default());
+    let (g, _) = r.visibility();
+    assert!(g.iter().any(|h| h.is_none()) && g.iter().any(|h| h.is_some()));
+    r.recycle_gbuffer(vec![Some(Hit { t: 1.0, tri: 7, bary: [0.25, 0.25, 0.5] }); g.len()]);
+    assert!(r.visibility().0 == g, "a recycled G-buffer's old contents leaked into the frame");
 }

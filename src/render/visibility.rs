@@ -21,11 +21,11 @@ use crate::camera::CameraRays;
 /// Fills the G-buffer: per pixel the visible triangle, the distance along the pixel's camera
 /// ray and the barycentrics of the hit; `None` where the pixel sees nothing. Shading points
 /// (normals, error bounds) are built from it by the shading passes.
+///
+/// Both strategies write every pixel, so the G-buffer of the previous frame is reused as it is.
 pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Option<Hit>> {
     let (w, h) = (r.scene.settings.width, r.scene.settings.height);
-    // Filled in parallel: a sequential fill of 24 bytes per pixel was 6 % of the raster pass.
-    let mut gbuffer = Vec::with_capacity(w as usize * h as usize);
-    gbuffer.par_extend(rayon::iter::repeat_n(None, w as usize * h as usize));
+    let mut gbuffer = r.take_gbuffer(w as usize * h as usize);
     match r.options.visibility {
         Visibility::Rays => {
             stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
@@ -107,7 +107,7 @@ fn transform(r: &Renderer, visible: &[u32], clip: &mut Vec<[Vec4; 3]>, ids: &mut
     }
     // Every cluster but the last has exactly CLUSTER triangles, and the last one, if in view,
     // comes last: the chunks of CLUSTER outputs line up with the clusters.
-    let (near, cam) = (r.raster_near, &r.camera);
+    let xf = ClipTransform::new(&r.camera, r.raster_near);
     // 16 clusters (1024 triangles) per task at least: a task per cluster cost more in rayon's
     // scheduling than the transform itself.
     let chunks = clip[..n].par_chunks_mut(CLUSTER).zip(ids[..n].par_chunks_mut(CLUSTER)).zip(visible);
@@ -115,7 +115,7 @@ fn transform(r: &Renderer, visible: &[u32], clip: &mut Vec<[Vec4; 3]>, ids: &mut
         let first = c as usize * CLUSTER;
         let src = &tris[first..first + clip.len()];
         for (k, ((out, id), tri)) in clip.iter_mut().zip(ids).zip(src).enumerate() {
-            *out = [to_clip(cam, near, tri[0]), to_clip(cam, near, tri[1]), to_clip(cam, near, tri[2])];
+            *out = tri.map(|p| xf.apply(p));
             *id = (first + k) as u32;
         }
     });
@@ -152,19 +152,51 @@ pub(crate) fn near_plane(scene: &crate::scene::Scene, camera: &CameraRays) -> f3
     (extent * (-20f32).exp2()).max(f32::MIN_POSITIVE)
 }
 
-/// Clip-space position (reversed-Z) of `p` for the camera's pinhole projection.
+/// The camera's pinhole projection to clip space (reversed-Z), as an affine map.
 ///
 /// The camera's pixel rays are `forward + sx right + sy up` with `sx = x_ndc tan_x`,
 /// `sy = y_ndc tan_y` (see [`CameraRays`]). A point `v = p - eye` lies on that ray when
 /// `v.right / v.forward = sx` and `v.up / v.forward = sy`, so `x = v.right / tan_x`,
 /// `y = v.up / tan_y`, `w = v.forward` give exactly the NDC of the pixel whose ray passes
 /// through `p`. `z = near` for every vertex stores `near / w` (reversed-Z).
-#[inline(always)]
+///
+/// Kept as the images of the three world axes (the columns of the map), so that a vertex is
+/// three 4-wide multiply-adds, `clip = vx cx + vy cy + vz cz + (0, 0, near, 0)`, instead of three
+/// horizontal dot products: the transform was a tenth of the raster pass. The rasterizer's
+/// coverage and exact-depth plane are both relative to these clip coordinates, so their
+/// rounding needs to match nothing else (the frustum culling's margin covers it, `cull.rs`).
+#[derive(Clone, Copy, Debug)]
+pub struct ClipTransform {
+    eye: glam::Vec3,
+    columns: [Vec4; 3],
+    near: Vec4,
+}
+
+impl ClipTransform {
+    pub fn new(cam: &CameraRays, near: f32) -> Self {
+        let (x, y, w) = (cam.right * cam.inv_tan_x, cam.up * cam.inv_tan_y, cam.forward);
+        Self {
+            eye: cam.eye,
+            columns: [0, 1, 2].map(|k| Vec4::new(x[k], y[k], 0.0, w[k])),
+            near: Vec4::new(0.0, 0.0, near, 0.0),
+        }
+    }
+
+    /// Clip-space position of `p`.
+    #[inline(always)]
+    pub fn apply(&self, p: glam::Vec3) -> Vec4 {
+        // Scalar differences: widening `p` to a `Vec4` first went through the stack, a
+        // store-forwarding stall per vertex.
+        let v = p - self.eye;
+        let [cx, cy, cz] = self.columns;
+        cx * v.x + cy * v.y + cz * v.z + self.near
+    }
+}
+
+/// Clip-space position (reversed-Z) of `p` for the camera's pinhole projection
+/// ([`ClipTransform`]; build that once to transform many points).
 pub fn to_clip(cam: &CameraRays, near: f32, p: glam::Vec3) -> Vec4 {
-    let v = p - cam.eye;
-    // Products with precomputed reciprocals: the rasterizer's coverage and exact-depth plane
-    // are both relative to these clip coordinates, so their rounding needs no match elsewhere.
-    Vec4::new(v.dot(cam.right) * cam.inv_tan_x, v.dot(cam.up) * cam.inv_tan_y, near, v.dot(cam.forward))
+    ClipTransform::new(cam, near).apply(p)
 }
 
 #[cfg(test)]

@@ -241,33 +241,36 @@ impl Renderer<'_> {
         let nl = self.scene.lights.len();
         let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
         // The shading points, once for all lights and passes; only where direct light is
-        // computed at all (surfaces with a diffuse reflectance).
-        gbuffer
-            .par_iter()
-            .enumerate()
-            .map(|(i, hit)| {
-                let (x, y) = ((i % w) as u32, (i / w) as u32);
-                hit.as_ref()
-                    .filter(|h| self.needs_light(h.tri))
-                    .map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x, y).dir))
-            })
-            .collect_into_vec(&mut bufs.surf);
-        bufs.surf
-            .par_iter()
-            .map(|s| s.as_ref().map_or((Vec3::ZERO, EMPTY), |s| (s.p, s.tri)))
-            .collect_into_vec(&mut bufs.points);
+        // computed at all (surfaces with a diffuse reflectance). One pass by rows writes the
+        // shading point, its position and triangle, and the lights it faces: three passes
+        // over the 72-byte shading points took twice as long. Every element is overwritten,
+        // so recycled buffers are only resized.
         let lights = &self.scene.lights;
         let stride = nl.div_ceil(8).max(1);
-        bufs.faces.clear();
+        bufs.surf.resize(n, None);
+        bufs.points.resize(n, (Vec3::ZERO, EMPTY));
         bufs.faces.resize(n * stride, 0);
-        bufs.faces.par_chunks_mut(stride).zip(&bufs.surf).for_each(|(bits, s)| {
-            let Some(s) = s else { return };
-            for (l, light) in lights.iter().enumerate() {
-                if facing(s, light).is_some() {
-                    bits[l / 8] |= 1 << (l % 8);
+        let rows = bufs.surf.par_chunks_mut(w.max(1)).zip(bufs.points.par_chunks_mut(w.max(1)));
+        rows.zip(bufs.faces.par_chunks_mut(w.max(1) * stride)).enumerate().for_each(
+            |(y, ((surf, points), faces))| {
+                let hits = &gbuffer[y * w..][..surf.len()];
+                let pixels = surf.iter_mut().zip(points.iter_mut()).zip(faces.chunks_mut(stride));
+                for (x, (((s, pt), bits), hit)) in pixels.zip(hits).enumerate() {
+                    *s = hit
+                        .as_ref()
+                        .filter(|h| self.needs_light(h.tri))
+                        .map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x as u32, y as u32).dir));
+                    *pt = s.as_ref().map_or((Vec3::ZERO, EMPTY), |s| (s.p, s.tri));
+                    bits.fill(0);
+                    let Some(s) = s else { continue };
+                    for (l, light) in lights.iter().enumerate() {
+                        if facing(s, light).is_some() {
+                            bits[l / 8] |= 1 << (l % 8);
+                        }
+                    }
                 }
-            }
-        });
+            },
+        );
         stats.time_ms.insert("surface", ms(t));
 
         let t = Instant::now();

@@ -12,7 +12,7 @@ use hyrt_shadowmap::MapKind;
 use crate::{
     film::atomic_write,
     metrics,
-    render::{Borders, Indirect, MirrorShadows, Options, Renderer, Shadows, Visibility},
+    render::{Borders, Indirect, MirrorShadows, Options, Renderer, Shadows, Visibility, indirect::VplFilter},
     scene,
     stats::RenderStats,
 };
@@ -141,6 +141,10 @@ pub struct Knobs {
     /// Resolution of each VPL's paraboloid map.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub vpl_map_res: Option<u32>,
+    /// How a VPL map decides visibility: the `texel` under the point (the thesis), or
+    /// `bilinear` over the 2x2 texels around it (percentage-closer filtering; the default).
+    #[arg(long, value_enum)]
+    pub vpl_filter: Option<VplFilterArg>,
     /// Also cast a shadow ray for every map decision and count those it contradicts
     /// (wrong-visibility pixels, in the stats; these rays are not counted as frame rays).
     #[arg(long)]
@@ -258,6 +262,12 @@ impl Knobs {
         if let Some(k) = self.interleave {
             io.interleave = k;
         }
+        if let Some(f) = self.vpl_filter {
+            io.filter = match f {
+                VplFilterArg::Texel => VplFilter::Texel,
+                VplFilterArg::Bilinear => VplFilter::Bilinear,
+            };
+        }
         if let Some(b) = self.vpl_bias {
             if !(b >= 0.0 && b.is_finite()) {
                 bail!("--vpl-bias must be a finite number >= 0, got {b}");
@@ -297,9 +307,16 @@ pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
         "vpl_clamp": o.indirect_opts.clamp,
         "vpl_map_res": o.indirect_opts.map.resolution,
         "vpl_bias": o.indirect_opts.bias,
+        "vpl_filter": o.indirect_opts.filter.name(),
         "interleave": o.indirect_opts.interleave,
         "max_depth": max_depth,
     })
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum VplFilterArg {
+    Texel,
+    Bilinear,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -165,12 +165,13 @@ fn vpl_maps_match_vpl_rays_on_cornell_bunny_mirror() {
     maps_against_rays("cornell-bunny-mirror.toml", 40.0);
 }
 
-/// Below the 40 dB target (measured 39.87 dB): VPLs within a fraction of a unit of a wall see
-/// that wall, and the blinds in front of it, squeezed into a band a texel or two wide of their
-/// map. Kept as a regression bound until the target is met.
+/// The hardest of the three: VPLs within a fraction of a unit of a wall see that wall, and the
+/// blinds in front of it, squeezed into a band a texel or two wide of their map. Measured
+/// 41.45 dB with the default 1536x1536 maps; at 1024x1024 it was 39.87 dB (40.05 dB with
+/// bilinear lookups), below the 40.
 #[test]
 fn vpl_maps_match_vpl_rays_on_office() {
-    maps_against_rays("office.toml", 39.5);
+    maps_against_rays("office.toml", 40.0);
 }
 
 #[test]

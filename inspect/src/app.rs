@@ -47,7 +47,7 @@ impl View {
 const CUBE_FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
 const PARABOLOID_FACES: [&str; 2] = ["+Z hemisphere", "-Z hemisphere"];
 const PICK_COLOR: Color32 = Color32::from_rgb(0, 255, 255);
-const RESOLUTIONS: [u32; 8] = [64, 128, 256, 512, 1024, 2048, 4096, 8192];
+const RESOLUTIONS: [u32; 9] = [64, 128, 256, 512, 1024, 1536, 2048, 4096, 8192];
 
 /// The inspector's state.
 pub struct Inspector {

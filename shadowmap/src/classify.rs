@@ -162,22 +162,53 @@ impl Classifier<'_> {
     #[inline]
     pub fn visible_at(&self, p: Vec3, own: u32, c: MapCoord) -> bool {
         let map = self.map;
-        let light = map.light();
-        let v = p - light;
         let last = map.resolution().saturating_sub(1);
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
         let id = map.face_ids(c.face).get(map.texel_index(ix, iy)).copied().unwrap_or(EMPTY);
         if id == EMPTY || id == own {
             return true;
         }
-        let r = v.length();
-        let dir = v / r;
-        let pl = self.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
-        let n = pl.truncate();
-        let cos = n.dot(dir);
-        let t = if cos.abs() >= 1e-6 { (pl.w - n.dot(light)) / cos } else { map.depth(c.face, ix, iy) };
-        let margin = self.bias * map.texel_angle(c) * r + TOLERANCE * (r + p.abs().max_element());
-        !(t > SHADOW_EPSILON * r && t < r - margin)
+        Occluders::new(self, p, c).visible(id, (ix, iy))
+    }
+
+    /// [`Classifier::visible`] filtered over the 2x2 texels whose centres surround `p`'s
+    /// projection (percentage-closer filtering): the sum of the bilinear weights of the texels
+    /// that [`Classifier::visible_at`]'s rule calls visible, in `[0, 1]`.
+    ///
+    /// Why: a lone texel decides visibility for everything within half a texel of its centre,
+    /// so a shadow edge in the map becomes a staircase on the receiver, displaced by up to half
+    /// a texel's footprint. Summed over many VPLs with rays, each edge is exactly where it is;
+    /// the filtered value is the expected visibility over a texel-sized neighbourhood, which on
+    /// average sits closer to it. Footprints that leave the face or the paraboloid's disc use
+    /// the texel under `p` alone. Still lookups only: no rays.
+    #[inline]
+    pub fn visibility_at(&self, p: Vec3, own: u32, c: MapCoord) -> f32 {
+        let map = self.map;
+        let last = map.resolution().saturating_sub(1);
+        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
+        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32;
+        let (x0, y0) = (fx as u32, fy as u32);
+        let foot = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
+        let in_domain = inside
+            && (map.kind() == MapKind::Cube || foot.iter().all(|&(x, y)| map.texel_in_domain(c.face, x, y)));
+        if !in_domain {
+            return if self.visible_at(p, own, c) { 1.0 } else { 0.0 };
+        }
+        let ids = map.face_ids(c.face);
+        let foot_ids = foot.map(|(x, y)| ids.get(map.texel_index(x, y)).copied().unwrap_or(EMPTY));
+        if foot_ids.iter().all(|&id| id == EMPTY || id == own) {
+            return 1.0;
+        }
+        let (ax, ay) = (c.x - 0.5 - fx, c.y - 0.5 - fy);
+        let weights = [(1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay];
+        let occ = Occluders::new(self, p, c);
+        let mut v = 0.0;
+        for ((&id, &xy), w) in foot_ids.iter().zip(&foot).zip(weights) {
+            if id == EMPTY || id == own || occ.visible(id, xy) {
+                v += w;
+            }
+        }
+        v
     }
 
     /// [`Classifier::classify`] with `p`'s location `c` from [`Classifier::locate`].
@@ -265,5 +296,44 @@ impl Classifier<'_> {
             }
         }
         Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, face: c.face, texel }
+    }
+}
+
+/// The per-point part of [`Classifier::visible_at`]'s rule, shared by the texels of a
+/// footprint: the point's distance and direction from the light and its margin.
+struct Occluders<'c, 'a> {
+    cls: &'c Classifier<'a>,
+    face: u8,
+    light: Vec3,
+    r: f32,
+    dir: Vec3,
+    margin: f32,
+}
+
+impl<'c, 'a> Occluders<'c, 'a> {
+    #[inline]
+    fn new(cls: &'c Classifier<'a>, p: Vec3, c: MapCoord) -> Self {
+        let light = cls.map.light();
+        let v = p - light;
+        let r = v.length();
+        let margin = cls.bias * cls.map.texel_angle(c) * r + TOLERANCE * (r + p.abs().max_element());
+        Self { cls, face: c.face, light, r, dir: v / r, margin }
+    }
+
+    /// Whether triangle `id` (not empty, not the point's own), seen at texel `(x, y)`, leaves
+    /// the point visible: it meets the ray from the light beyond the margin band, or within
+    /// `SHADOW_EPSILON r` of the light; an occluder within the band counts as the point's own
+    /// surface.
+    #[inline]
+    fn visible(&self, id: u32, (x, y): (u32, u32)) -> bool {
+        let pl = self.cls.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
+        let n = pl.truncate();
+        let cos = n.dot(self.dir);
+        let t = if cos.abs() >= 1e-6 {
+            (pl.w - n.dot(self.light)) / cos
+        } else {
+            self.cls.map.depth(self.face, x, y)
+        };
+        !(t > SHADOW_EPSILON * self.r && t < self.r - self.margin)
     }
 }

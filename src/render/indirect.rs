@@ -35,19 +35,48 @@ pub struct IndirectOptions {
     /// Interleaved sampling: each pixel of a `k x k` pattern evaluates a `1 / k^2` subset of
     /// the VPLs, then a geometry-aware filter reconstructs (see [`run`]); 1 = off.
     pub interleave: u32,
+    /// How a VPL map decides visibility: the texel under the point (the thesis), or the 2x2
+    /// texels around it, bilinearly weighted ([`Classifier::visibility_at`]).
+    pub filter: VplFilter,
+}
+
+/// [`IndirectOptions::filter`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VplFilter {
+    /// The texel under the point decides: visible or not.
+    #[default]
+    Texel,
+    /// Percentage-closer filtering over the 2x2 texels around the point: a fraction.
+    Bilinear,
+}
+
+impl VplFilter {
+    pub fn name(self) -> &'static str {
+        match self {
+            VplFilter::Texel => "texel",
+            VplFilter::Bilinear => "bilinear",
+        }
+    }
 }
 
 /// Defaults measured on the thesis scenes with 45 VPLs (maps against rays, full image): at
 /// 256x256 per VPL 39.1 / 32.2 dB (Cornell box / office), at 1024x1024 with bias 0.5 about
-/// 49 / 39.9 dB, at 2048 the office reaches 42.2 dB but its maps take 1.4 GB and 12 s.
+/// 52 / 39.9 dB, short of the office's 40 dB. The office sweep (`hyrt sweep scenes/office.toml
+/// --base "--preset reference --indirect maps --vpls 45" --knob vpl-filter=texel,bilinear
+/// --knob vpl-map-res=512,1024,1536`) put texel lookups at 1536x1536 on the front: 41.45 dB at
+/// the frame time of 1024x1024 (2.19x against 2.26x), where bilinear lookups at 1024 give
+/// 40.05 dB for 10 % more frame time; the price is memory and build time (812 MB and 6.6 s for
+/// the office's 43 maps, against 361 MB and 3.3 s). At 2048 the office reaches 42.2 dB but its
+/// maps take 1.4 GB and 12 s.
 impl Default for IndirectOptions {
     fn default() -> Self {
         Self {
             vpl: vpl::VplOptions::default(),
             clamp: 0.01,
-            map: MapOptions { resolution: 1024, ..MapOptions::default() },
+            map: MapOptions { resolution: 1536, ..MapOptions::default() },
             bias: 0.5,
             interleave: 1,
+            filter: VplFilter::default(),
         }
     }
 }
@@ -193,15 +222,17 @@ impl Vpls<'_> {
             let visible = match self.maps.get(k) {
                 // No rays to settle it: an occluder within the bias band is taken to be the
                 // point's own curved surface (the commoner case), not a contact shadow.
-                Some(map) => Classifier { map, planes: self.planes, bias: r.options.indirect_opts.bias }
-                    .visible(s.p, s.tri),
+                Some(map) => {
+                    let cls = Classifier { map, planes: self.planes, bias: r.options.indirect_opts.bias };
+                    visibility(&cls, r.options.indirect_opts.filter, s.p, s.tri, cls.locate(s.p))
+                }
                 None => {
                     let ray = spawn_ray_to(s.p, s.p_err, s.ng, v.position);
-                    !r.tracer.occluded(&ray, RayKind::VplShadow, counts)
+                    if r.tracer.occluded(&ray, RayKind::VplShadow, counts) { 0.0 } else { 1.0 }
                 }
             };
-            if visible {
-                sum += v.intensity * g;
+            if visible > 0.0 {
+                sum += v.intensity * (g * visible);
             }
         }
         kd * FRAC_1_PI * sum * stride as f32
@@ -258,7 +289,7 @@ pub fn run(
     let mut irr = vec![Vec3::ZERO; n];
 
     const BAND: usize = 4;
-    let bias = r.options.indirect_opts.bias;
+    let (bias, filter) = (r.options.indirect_opts.bias, r.options.indirect_opts.filter);
     let counts: Vec<RayCounts> = irr
         .par_chunks_mut(w * BAND)
         .enumerate()
@@ -301,8 +332,9 @@ pub fn run(
                     }
                     for &(j, g, c) in &located {
                         let s = &pts[first + j].as_ref().expect("located points have a hit").0;
-                        if cls.visible_at(s.p, s.tri, c) {
-                            irr[j] += vpl.intensity * g;
+                        let visible = visibility(&cls, filter, s.p, s.tri, c);
+                        if visible > 0.0 {
+                            irr[j] += vpl.intensity * (g * visible);
                         }
                     }
                 }
@@ -321,6 +353,28 @@ pub fn run(
         }
     });
     counts.into_iter().sum()
+}
+
+/// The visibility of a VPL from point `p` of triangle `own` (located at `c` in the VPL's map)
+/// under `filter`: 0 or 1 for [`VplFilter::Texel`], a fraction for [`VplFilter::Bilinear`].
+#[inline]
+fn visibility(
+    cls: &Classifier,
+    filter: VplFilter,
+    p: Vec3,
+    own: u32,
+    c: hyrt_shadowmap::map::MapCoord,
+) -> f32 {
+    match filter {
+        VplFilter::Texel => {
+            if cls.visible_at(p, own, c) {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        VplFilter::Bilinear => cls.visibility_at(p, own, c),
+    }
 }
 
 /// The geometry-aware `k x k` box filter of interleaved sampling (see [`run`]), on the

@@ -1,7 +1,7 @@
 #!/bin/sh
 # Regenerates the measurements committed under docs/: the thesis tables (docs/bench/) and one
 # accuracy-vs-time sweep per thesis scene (docs/sweeps/). Run from the project root on a quiet
-# machine, after `cargo build --release`: `sh docs/measure.sh` (about 30 minutes on 2 cores), or
+# machine, after `cargo build --release`: `sh docs/measure.sh` (about 35 minutes on 2 cores), or
 # `sh docs/measure.sh sweeps` for the sweeps alone.
 set -e
 H=./target/release/hyrt
@@ -15,3 +15,6 @@ $H sweep scenes/conference.toml --runs 3 --out docs/sweeps/conference \
 $H sweep scenes/cornell-bunny-mirror.toml --runs 5 --out docs/sweeps/cornell-bunny-mirror-vpl \
   --base "--preset hybrid --indirect maps --vpls 45" \
   --knob vpl-map-res=256,512,1024 --knob interleave=1,2,4 --knob vpl-bias=0.25,0.5,1
+$H sweep scenes/office.toml --runs 5 --out docs/sweeps/office-vpl \
+  --base "--preset reference --indirect maps --vpls 45" \
+  --knob vpl-filter=texel,bilinear --knob vpl-map-res=512,1024,1536,2048

@@ -184,13 +184,7 @@ impl Classifier<'_> {
     #[inline]
     pub fn visibility_at(&self, p: Vec3, own: u32, c: MapCoord) -> f32 {
         let map = self.map;
-        let last = map.resolution().saturating_sub(1);
-        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
-        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32;
-        let (x0, y0) = (fx as u32, fy as u32);
-        let foot = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
-        let in_domain = inside
-            && (map.kind() == MapKind::Cube || foot.iter().all(|&(x, y)| map.texel_in_domain(c.face, x, y)));
+        let Footprint { texels: foot, in_domain, offset: (ax, ay), .. } = Footprint::of(map, c);
         if !in_domain {
             return if self.visible_at(p, own, c) { 1.0 } else { 0.0 };
         }
@@ -199,7 +193,6 @@ impl Classifier<'_> {
         if foot_ids.iter().all(|&id| id == EMPTY || id == own) {
             return 1.0;
         }
-        let (ax, ay) = (c.x - 0.5 - fx, c.y - 0.5 - fy);
         let weights = [(1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay];
         let occ = Occluders::new(self, p, c);
         let mut v = 0.0;
@@ -224,14 +217,7 @@ impl Classifier<'_> {
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
         let centre = at(ix, iy);
 
-        // The 2x2 texels whose centres surround the projection (the texel containing it is one
-        // of them).
-        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
-        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32;
-        let (x0, y0) = (fx as u32, fy as u32);
-        let foot = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
-        let in_domain = inside
-            && (map.kind() == MapKind::Cube || foot.iter().all(|&(x, y)| map.texel_in_domain(c.face, x, y)));
+        let Footprint { texels: foot, inside, in_domain, .. } = Footprint::of(map, c);
         let foot_ids = if inside { foot.map(|(x, y)| at(x, y)) } else { [centre; 4] };
         let texel = [ix, iy];
 
@@ -296,6 +282,33 @@ impl Classifier<'_> {
             }
         }
         Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, face: c.face, texel }
+    }
+}
+
+/// The 2x2 texels whose centres surround a point's projection `c` (the texel containing it is
+/// one of them).
+struct Footprint {
+    texels: [(u32, u32); 4],
+    /// Whether all four lie within the face (else `texels` is meaningless).
+    inside: bool,
+    /// Whether all four are in the face's domain too (the paraboloid's disc).
+    in_domain: bool,
+    /// `c`'s offset from the first texel's centre, in `[0, 1)` per axis: the bilinear weights.
+    offset: (f32, f32),
+}
+
+impl Footprint {
+    #[inline]
+    fn of(map: &LightMap, c: MapCoord) -> Self {
+        let last = map.resolution().saturating_sub(1);
+        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
+        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32;
+        let (x0, y0) = (fx as u32, fy as u32);
+        let texels = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
+        let in_domain = inside
+            && (map.kind() == MapKind::Cube
+                || texels.iter().all(|&(x, y)| map.texel_in_domain(c.face, x, y)));
+        Self { texels, inside, in_domain, offset: (c.x - 0.5 - fx, c.y - 0.5 - fy) }
     }
 }
 

@@ -5,6 +5,8 @@
 //! - the visibility pass alone (`HYRT_BENCH_FRAMES`, default 15 frames each), with the raster
 //!   pass split into transform, rasterization and hit-point resolve;
 //! - the whole reference frame with each visibility strategy (a third as many frames);
+//! - what the rasterizer processed (triangles submitted after the cluster culling, set up,
+//!   tiny, bin entries) and the CPU time per submitted triangle and per resolved pixel;
 //! - rays per frame by kind, for each strategy;
 //! - the rasterizer alone in M triangles/s.
 //!
@@ -27,6 +29,7 @@ fn main() {
     );
     let mut vis_rows = Vec::new();
     let mut ray_rows = Vec::new();
+    let mut work_rows = Vec::new();
     for spec in scenes() {
         let Some(scene) = load_640x480(&spec) else { continue };
         let rays = Renderer::new(&scene, Options { visibility: Visibility::Rays, ..Options::default() });
@@ -64,9 +67,23 @@ fn main() {
             f_raster.push(t.elapsed().as_secs_f64() * 1e3);
             s_raster = Some(f.stats.rays);
         }
+        let rs = raster.raster_stats();
         let (vr, vz) = (median(&mut t_rays), median(&mut t_raster));
         let (fr, fz) = (median(&mut f_rays), median(&mut f_raster));
         let rz = median(&mut t_rz);
+        // Per item and core: the pass's CPU time (ms x threads) over what it processed.
+        let cpu_ns = |ms: f64, n: usize| ms * 1e6 * rayon::current_num_threads() as f64 / n.max(1) as f64;
+        work_rows.push(format!(
+            "| {} | {} | {} | {} ({:.0} %) | {} | {:.0} | {:.1} |",
+            scene.name,
+            rs.submitted,
+            rs.set_up,
+            rs.tiny,
+            100.0 * rs.tiny as f64 / rs.set_up.max(1) as f64,
+            rs.bin_entries,
+            cpu_ns(rz, rs.submitted),
+            cpu_ns(median(&mut t_rs.clone()), (scene.settings.width * scene.settings.height) as usize),
+        ));
         vis_rows.push(format!(
             "| {} | {} | {:.1} | {:.1} ({:.1} + {:.1} + {:.1}) | {:.1}x | {:.0} | {:.0} | {:.2}x | {:.1} |",
             scene.name,
@@ -98,6 +115,13 @@ fn main() {
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in vis_rows {
+        println!("{r}");
+    }
+    println!(
+        "\n| scene | triangles submitted | set up | of which tiny (<= 2x2 px) | bin entries | raster ns per submitted triangle and core | resolve ns per pixel and core |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    for r in work_rows {
         println!("{r}");
     }
     println!("\n| scene | visibility | primary | shadow | specular | total |");

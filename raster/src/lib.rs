@@ -255,6 +255,26 @@ pub fn rasterize(tris: &[[Vec4; 3]], ids: &[u32], width: u32, height: u32, opts:
 #[derive(Default)]
 pub struct Rasterizer {
     chunks: Vec<tile::Chunk>,
+    /// Triangles and chunks of the last call (`stats` counts from the chunks on demand, so that
+    /// frames that do not ask pay nothing).
+    submitted: usize,
+    used_chunks: usize,
+}
+
+/// What the last call of a [`Rasterizer`] processed: where its time goes, per item.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RasterStats {
+    /// Triangles passed in (setup reads each).
+    pub submitted: usize,
+    /// Set-up triangles kept for drawing: triangles (or, after clipping, fan triangles) that are
+    /// in view, have a non-zero snapped area and may cover a pixel centre. Those falling between
+    /// the pixel centres are dropped by setup and not counted.
+    pub set_up: usize,
+    /// Of those, the ones whose pixel bounds span at most 2 x 2 pixels: the sub-pixel triangles
+    /// of detailed meshes.
+    pub tiny: usize,
+    /// (set-up triangle, tile) pairs: the depth test's triangle work.
+    pub bin_entries: usize,
 }
 
 impl std::fmt::Debug for Rasterizer {
@@ -267,6 +287,12 @@ impl Rasterizer {
     /// A rasterizer with no memory reserved yet.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// What the last [`Rasterizer::rasterize_into`] processed (all zero before the first call
+    /// and for an empty target).
+    pub fn stats(&self) -> RasterStats {
+        RasterStats { submitted: self.submitted, ..tile::stats(&self.chunks[..self.used_chunks]) }
     }
 
     /// [`rasterize`] into `target`, whose buffers are reused (resized to `width x height`; every
@@ -288,11 +314,13 @@ impl Rasterizer {
         check_dims(width, height);
         if width == 0 || height == 0 {
             *target = Target::empty(width, height);
+            (self.submitted, self.used_chunks) = (0, 0);
             return;
         }
         let ctx = SetupContext::new(width, height, opts.cull_backfaces);
         let isa = zbuf::Isa::detect();
         let binned = tile::Binned::new(&mut self.chunks, tris, Some(ids), &ctx, opts.tile_size, isa);
+        (self.submitted, self.used_chunks) = (tris.len(), binned.chunk_count());
         // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
         let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
         zbuf::render(&binned, opts.reversed_z, tie, opts.barycentrics, isa, target);

@@ -149,6 +149,17 @@ impl Chunk {
     }
 }
 
+/// Counts of the set-up triangles and bin entries of `chunks` (`submitted` left 0).
+pub(crate) fn stats(chunks: &[Chunk]) -> crate::RasterStats {
+    let tris = || chunks.iter().flat_map(|c| &c.tris);
+    crate::RasterStats {
+        submitted: 0,
+        set_up: tris().count(),
+        tiny: tris().filter(|t| t.bbox[2] - t.bbox[0] <= 1 && t.bbox[3] - t.bbox[1] <= 1).count(),
+        bin_entries: chunks.iter().map(|c| c.items.len()).sum(),
+    }
+}
+
 /// All set-up triangles, binned into the tiles of `grid`.
 pub(crate) struct Binned<'c> {
     pub grid: TileGrid,
@@ -200,6 +211,11 @@ impl<'c> Binned<'c> {
             let items = &c.items[c.start[t] as usize..c.start[t + 1] as usize];
             items.iter().map(|&i| &c.tris[i as usize])
         })
+    }
+
+    /// The number of chunks holding this call's triangles.
+    pub fn chunk_count(&self) -> usize {
+        self.chunks.len()
     }
 
     /// Whether no triangle overlaps tile `t`.

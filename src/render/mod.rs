@@ -337,6 +337,12 @@ impl<'a> Renderer<'a> {
         (g, stats)
     }
 
+    /// What the rasterizer processed in the last raster visibility pass (all zero before one):
+    /// submitted, set-up and tiny triangles, bin entries. Counted on demand, outside any pass.
+    pub fn raster_stats(&self) -> hyrt_raster::RasterStats {
+        self.raster.lock().unwrap_or_else(|e| e.into_inner()).rasterizer.stats()
+    }
+
     /// Keeps `gbuffer` for the next visibility pass to overwrite.
     pub fn recycle_gbuffer(&self, gbuffer: Vec<Option<Hit>>) {
         *self.gbuffer.lock().unwrap_or_else(|e| e.into_inner()) = gbuffer;

@@ -85,7 +85,7 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
 /// them would be mapped, faulted in page by page and unmapped every frame.
 #[derive(Debug, Default)]
 pub(crate) struct RasterScratch {
-    rasterizer: Rasterizer,
+    pub(crate) rasterizer: Rasterizer,
     target: Target,
     /// Clip-space triangles of the clusters in view and their ids (triangle indices); only the
     /// first `n` entries (returned by [`transform`]) belong to the current frame.

@@ -522,7 +522,10 @@ fn render(a: &RenderArgs) -> Result<()> {
     }
     if let Some(p) = &a.stats {
         let opts = options_json(&options, scene.settings.max_depth);
-        let stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, renderer.bvh_build_ms());
+        let mut stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, renderer.bvh_build_ms());
+        if options.visibility == Visibility::Raster {
+            stats = stats.with_raster(renderer.raster_stats());
+        }
         let json = serde_json::to_string_pretty(&stats)?;
         atomic_write(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?;
         say(format!("wrote {}", p.display()));

@@ -32,6 +32,11 @@ pub struct RenderStats<'a> {
     /// With indirect light: the VPLs and the memory of their maps.
     pub vpls: u32,
     pub vpl_map_bytes: u64,
+    /// With `--visibility raster`: what the rasterizer processed (`Renderer::raster_stats`):
+    /// triangles `submitted` after the cluster culling, `set_up` (kept for drawing), `tiny`
+    /// (of those, pixel bounds of at most 2x2) and `bin_entries` ((triangle, tile) pairs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub raster: Option<serde_json::Value>,
     /// Milliseconds: `total` (BVH build + frame), `frame`, `bvh_build` and one entry per pass.
     pub time_ms: serde_json::Map<String, serde_json::Value>,
 }
@@ -81,7 +86,19 @@ impl<'a> RenderStats<'a> {
                 "vpl_path": r.vpl_path,
                 "total": r.total(),
             }),
+            raster: None,
             time_ms,
         }
+    }
+
+    /// Adds the rasterizer's counts ([`RenderStats::raster`]).
+    pub fn with_raster(mut self, s: hyrt_raster::RasterStats) -> Self {
+        self.raster = Some(serde_json::json!({
+            "submitted": s.submitted,
+            "set_up": s.set_up,
+            "tiny": s.tiny,
+            "bin_entries": s.bin_entries,
+        }));
+        self
     }
 }

@@ -263,6 +263,15 @@ fn raster_visibility_from_the_cli() {
     for k in ["visibility", "vis_transform", "vis_raster", "vis_resolve"] {
         assert!(v["time_ms"][k].as_f64().is_some(), "time_ms.{k} missing");
     }
+    // What the rasterizer processed: the built-in box's 32 triangles, some set up and binned.
+    let raster = &v["raster"];
+    assert_eq!(raster["submitted"], 32, "{raster}");
+    let (set_up, tiny, bins) = (
+        raster["set_up"].as_u64().unwrap(),
+        raster["tiny"].as_u64().unwrap(),
+        raster["bin_entries"].as_u64().unwrap(),
+    );
+    assert!((1..=32).contains(&set_up) && tiny <= set_up && bins >= set_up, "{raster}");
     let (ok, _, err) =
         hyrt(&["render", "cornell", "--visibility", "zbuffer", "-o", d.join("x.png").to_str().unwrap()]);
     assert!(!ok && err.contains("possible values: rays, raster"), "{err}");

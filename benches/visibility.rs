@@ -67,22 +67,22 @@ fn main() {
             f_raster.push(t.elapsed().as_secs_f64() * 1e3);
             s_raster = Some(f.stats.rays);
         }
-        let rs = raster.raster_stats();
+        let work = raster.raster_stats();
         let (vr, vz) = (median(&mut t_rays), median(&mut t_raster));
         let (fr, fz) = (median(&mut f_rays), median(&mut f_raster));
-        let rz = median(&mut t_rz);
+        let (rz, rv) = (median(&mut t_rz), median(&mut t_rs));
         // Per item and core: the pass's CPU time (ms x threads) over what it processed.
         let cpu_ns = |ms: f64, n: usize| ms * 1e6 * rayon::current_num_threads() as f64 / n.max(1) as f64;
         work_rows.push(format!(
             "| {} | {} | {} | {} ({:.0} %) | {} | {:.0} | {:.1} |",
             scene.name,
-            rs.submitted,
-            rs.set_up,
-            rs.tiny,
-            100.0 * rs.tiny as f64 / rs.set_up.max(1) as f64,
-            rs.bin_entries,
-            cpu_ns(rz, rs.submitted),
-            cpu_ns(median(&mut t_rs.clone()), (scene.settings.width * scene.settings.height) as usize),
+            work.submitted,
+            work.set_up,
+            work.tiny,
+            100.0 * work.tiny as f64 / work.set_up.max(1) as f64,
+            work.bin_entries,
+            cpu_ns(rz, work.submitted),
+            cpu_ns(rv, (scene.settings.width * scene.settings.height) as usize),
         ));
         vis_rows.push(format!(
             "| {} | {} | {:.1} | {:.1} ({:.1} + {:.1} + {:.1}) | {:.1}x | {:.0} | {:.0} | {:.2}x | {:.1} |",
@@ -92,7 +92,7 @@ fn main() {
             vz,
             median(&mut t_xf),
             rz,
-            median(&mut t_rs),
+            rv,
             vr / vz,
             fr,
             fz,

@@ -44,33 +44,9 @@ fn transform(view_proj: &Mat4, world: &[[Vec3; 3]]) -> Vec<[Vec4; 3]> {
     world.iter().map(|t| t.map(|p| *view_proj * p.extend(1.0))).collect()
 }
 
-/// A UV sphere of radius 1 at the origin: `2 * slices * (stacks - 1)` triangles.
-fn sphere(slices: u32, stacks: u32) -> Vec<[Vec3; 3]> {
-    let vertex = |i: u32, j: u32| {
-        let (theta, phi) = (
-            j as f32 / stacks as f32 * std::f32::consts::PI,
-            i as f32 / slices as f32 * std::f32::consts::TAU,
-        );
-        Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
-    };
-    let mut tris = Vec::new();
-    for j in 0..stacks {
-        for i in 0..slices {
-            let (a, b, c, d) = (vertex(i, j), vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1));
-            if j > 0 {
-                tris.push([a, b, c]);
-            }
-            if j + 1 < stacks {
-                tris.push([b, d, c]);
-            }
-        }
-    }
-    tris
-}
-
 fn scene_sphere() -> Vec<[Vec4; 3]> {
     let view_proj = camera(Vec3::new(0.0, 0.0, 3.2), Vec3::ZERO);
-    transform(&view_proj, &sphere(250, 201))
+    transform(&view_proj, &synthetic::uv_sphere(250, 201, |d| d))
 }
 
 fn scene_quads() -> Vec<[Vec4; 3]> {
@@ -165,5 +141,5 @@ fn offscreen_300k(bencher: Bencher, bary: bool) {
 fn map_1024(bencher: Bencher, bary: bool) {
     let proj = glam::camera::rh::proj::directx::perspective_infinite_reverse(90f32.to_radians(), 1.0, 0.01);
     let view_proj = proj * glam::camera::rh::view::look_at_mat4(Vec3::ZERO, Vec3::Z, Vec3::Y);
-    bench_size(bencher, transform(&view_proj, &sphere(250, 201)), bary, 1024, 1024);
+    bench_size(bencher, transform(&view_proj, &synthetic::uv_sphere(250, 201, |d| d)), bary, 1024, 1024);
 }

@@ -8,7 +8,11 @@
 //! - what the rasterizer processed (triangles submitted after the cluster culling, set up,
 //!   tiny, bin entries) and the CPU time per submitted triangle and per resolved pixel;
 //! - rays per frame by kind, for each strategy;
-//! - the rasterizer alone in M triangles/s.
+//! - the rasterizer alone in M triangles/s;
+//! - the densest mesh of each scene (most triangles per pixel it is seen at): primary rays over
+//!   its pixels against rasterizing its triangles alone, and rays over the other pixels. It
+//!   shows where the 10x target is lost: a mesh with more triangles than pixels costs the
+//!   rasterizer per triangle what it costs rays per pixel.
 //!
 //! Threads: all cores (`RAYON_NUM_THREADS` to change). Scenes: `HYRT_BENCH_SCENES`.
 
@@ -18,7 +22,10 @@ use std::time::Instant;
 
 use common::{frames, load_640x480, median, scenes};
 
-use hyrt::render::{Options, Renderer, Visibility};
+use hyrt::render::{Options, Renderer, Visibility, visibility::ClipTransform};
+use hyrt_raster::{RasterOptions, Rasterizer, Target};
+use hyrt_tracer::{RayCounts, RayKind};
+use rayon::prelude::*;
 
 fn main() {
     let frames = frames(15);
@@ -30,6 +37,7 @@ fn main() {
     let mut vis_rows = Vec::new();
     let mut ray_rows = Vec::new();
     let mut work_rows = Vec::new();
+    let mut dense_rows = Vec::new();
     for spec in scenes() {
         let Some(scene) = load_640x480(&spec) else { continue };
         let rays = Renderer::new(&scene, Options { visibility: Visibility::Rays, ..Options::default() });
@@ -68,6 +76,7 @@ fn main() {
             s_raster = Some(f.stats.rays);
         }
         let work = raster.raster_stats();
+        dense_rows.extend(densest_mesh(&raster, frames));
         let (vr, vz) = (median(&mut t_rays), median(&mut t_raster));
         let (fr, fz) = (median(&mut f_rays), median(&mut f_raster));
         let (rz, rv) = (median(&mut t_rz), median(&mut t_rs));
@@ -124,9 +133,94 @@ fn main() {
     for r in work_rows {
         println!("{r}");
     }
+    println!(
+        "\n| scene | densest mesh | triangles | pixels seeing it | rays over its pixels, ms | rasterizing its triangles, ms | speed-up there | rays over the other pixels, ms |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    for r in dense_rows {
+        println!("{r}");
+    }
     println!("\n| scene | visibility | primary | shadow | specular | total |");
     println!("|---|---|---:|---:|---:|---:|");
     for r in ray_rows {
         println!("{r}");
     }
+}
+
+/// The mesh with the most triangles per pixel that sees it (among meshes seen by at least 1 %
+/// of the pixels), timed alone: primary rays over its pixels, the rasterizer (transform to clip
+/// space, setup, depth test; the renderer's options) over its triangles less an empty frame, and
+/// rays over the other pixels; alternated, medians of `frames`. `None` if no mesh qualifies.
+fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
+    let scene = r.scene;
+    let (w, h) = (scene.settings.width, scene.settings.height);
+    let (gbuffer, _) = r.visibility();
+    let seen = |m: &hyrt::scene::MeshRange, id: u32| id >= m.first && id - m.first < m.count;
+    let pixels = |m: &hyrt::scene::MeshRange| gbuffer.iter().flatten().filter(|hit| seen(m, hit.tri)).count();
+    let min_pixels = (w * h / 100) as usize;
+    let (mesh, count) = scene
+        .meshes
+        .iter()
+        .map(|m| (m, pixels(m)))
+        .filter(|&(_, n)| n >= min_pixels.max(1))
+        .max_by(|a, b| (a.0.count as f64 / a.1 as f64).total_cmp(&(b.0.count as f64 / b.1 as f64)))?;
+    let (mine, other): (Vec<u32>, Vec<u32>) =
+        (0..w * h).partition(|&k| gbuffer[k as usize].is_some_and(|hit| seen(mesh, hit.tri)));
+    r.recycle_gbuffer(gbuffer);
+
+    // Rows of pixels in image order, as the rays pass traces them.
+    let trace = |px: &[u32]| {
+        let t = Instant::now();
+        let hits: usize = px
+            .par_chunks(w as usize)
+            .map(|run| {
+                let mut c = RayCounts::default();
+                let ray = |k: u32| r.camera_ray(k % w, k / w);
+                run.iter()
+                    .filter(|&&k| r.tracer.closest_hit(&ray(k), RayKind::Primary, &mut c).is_some())
+                    .count()
+            })
+            .sum();
+        std::hint::black_box(hits);
+        t.elapsed().as_secs_f64() * 1e3
+    };
+    let tris = &scene.positions[mesh.first as usize..][..mesh.count as usize];
+    let ids: Vec<u32> = (mesh.first..mesh.first + mesh.count).collect();
+    let xf = ClipTransform::new(&r.camera, r.raster_near);
+    let opts = RasterOptions {
+        reversed_z: true,
+        depth_tie: hyrt_tracer::DEPTH_TIE,
+        barycentrics: false,
+        ..RasterOptions::default()
+    };
+    let (mut rasterizer, mut target, mut clip) = (Rasterizer::new(), Target::default(), Vec::new());
+    let mut raster = |tris: &[[glam::Vec3; 3]]| {
+        let t = Instant::now();
+        clip.clear();
+        clip.par_extend(tris.par_iter().map(|tri| tri.map(|p| xf.apply(p))));
+        rasterizer.rasterize_into(&clip, &ids[..tris.len()], w, h, &opts, &mut target);
+        t.elapsed().as_secs_f64() * 1e3
+    };
+    let (mut t_mine, mut t_raster, mut t_other) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..=frames {
+        let a = trace(&mine);
+        // The mesh's own cost: minus a frame of no triangles (clearing the buffers, visiting
+        // the tiles), which the whole pass pays once.
+        let b = raster(tris) - raster(&[]);
+        let c = trace(&other);
+        if i > 0 {
+            t_mine.push(a);
+            t_raster.push(b);
+            t_other.push(c);
+        }
+    }
+    let (a, b) = (median(&mut t_mine), median(&mut t_raster));
+    Some(format!(
+        "| {} | {} | {} | {count} | {a:.2} | {b:.2} | {:.1}x | {:.2} |",
+        scene.name,
+        mesh.name,
+        mesh.count,
+        a / b,
+        median(&mut t_other)
+    ))
 }

@@ -1,6 +1,7 @@
 //! Thesis table 4.1: primary visibility by rays vs by rasterization.
 //!
-//! `cargo bench --bench visibility` renders each thesis scene at 640x480 and prints, measured
+//! `cargo bench --bench visibility` renders each thesis scene at 640x480 (`HYRT_BENCH_SIZE`, e.g.
+//! `1280x960`, for another size) and prints, measured
 //! side by side in one process (strategies alternated frame by frame, medians):
 //! - the visibility pass alone (`HYRT_BENCH_FRAMES`, default 15 frames each), with the raster
 //!   pass split into transform, rasterization and hit-point resolve;
@@ -20,7 +21,7 @@ mod common;
 
 use std::time::Instant;
 
-use common::{frames, load_640x480, median, scenes};
+use common::{frames, load_640x480, median, scenes, size};
 
 use hyrt::render::{Options, Renderer, Visibility, visibility::ClipTransform};
 use hyrt_raster::{RasterOptions, Rasterizer, Target};
@@ -29,8 +30,9 @@ use rayon::prelude::*;
 
 fn main() {
     let frames = frames(15);
+    let (width, height) = size();
     println!(
-        "primary visibility at 640x480, {} threads; visibility medians of {frames} frames, whole frames of {}\n",
+        "primary visibility at {width}x{height}, {} threads; visibility medians of {frames} frames, whole frames of {}\n",
         rayon::current_num_threads(),
         frames.div_ceil(3)
     );
@@ -39,7 +41,8 @@ fn main() {
     let mut work_rows = Vec::new();
     let mut dense_rows = Vec::new();
     for spec in scenes() {
-        let Some(scene) = load_640x480(&spec) else { continue };
+        let Some(mut scene) = load_640x480(&spec) else { continue };
+        (scene.settings.width, scene.settings.height) = (width, height);
         let rays = Renderer::new(&scene, Options { visibility: Visibility::Rays, ..Options::default() });
         let raster = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
 

@@ -34,6 +34,20 @@ pub fn scenes() -> Vec<String> {
         .collect()
 }
 
+/// `HYRT_BENCH_SIZE` (`WIDTHxHEIGHT`, both from 1 to 16384), or 640x480 (the thesis's size).
+/// Exits with a message if it is set but malformed.
+pub fn size() -> (u32, u32) {
+    let Ok(v) = std::env::var("HYRT_BENCH_SIZE") else { return (640, 480) };
+    let parsed = v.split_once('x').and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)));
+    match parsed {
+        Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => (w, h),
+        _ => {
+            eprintln!("HYRT_BENCH_SIZE={v:?}: expected WIDTHxHEIGHT, e.g. 1280x960, each 1 to 16384");
+            std::process::exit(2);
+        }
+    }
+}
+
 /// Loads a scene at 640x480 (the thesis's size), or says why it is skipped.
 pub fn load_640x480(spec: &str) -> Option<hyrt::scene::Scene> {
     match hyrt::scene::load(spec) {

@@ -194,6 +194,7 @@ fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
         reversed_z: true,
         depth_tie: hyrt_tracer::DEPTH_TIE,
         barycentrics: false,
+        depth: false,
         ..RasterOptions::default()
     };
     let (mut rasterizer, mut target, mut clip) = (Rasterizer::new(), Target::default(), Vec::new());

@@ -274,15 +274,18 @@ impl<'a> ZBuffer<'a> {
         }
     }
 
-    /// [`ZBuffer::resolve`] without barycentrics: the tile's depths and ids only, emptying the
-    /// z-buffer as it goes (every entry of the tile's rows; the spare row and padding are never
-    /// changed by the kernels), so that it is [`ZBuffer::clean`] afterwards.
-    fn resolve_ids(&mut self, depth: Rows<f32>, id: Rows<u32>) {
+    /// [`ZBuffer::resolve`] without barycentrics: the tile's ids and, if asked, depths, emptying
+    /// the z-buffer as it goes (every entry of the tile's rows; the spare row and padding are
+    /// never changed by the kernels), so that it is [`ZBuffer::clean`] afterwards.
+    fn resolve_ids(&mut self, depth: Option<Rows<f32>>, id: Rows<u32>) {
         let w = self.w;
         let empty = f32::from_bits(self.empty);
-        for (r, (d_row, i_row)) in depth.into_iter().zip(id).enumerate() {
+        let mut depth = depth.map(Vec::into_iter);
+        for (r, i_row) in id.into_iter().enumerate() {
             let (zd, zw) = (&mut self.depth[r * w..(r + 1) * w], &mut self.win[r * w..(r + 1) * w]);
-            d_row.write_copy_of_slice(zd);
+            if let Some(d_row) = depth.as_mut().and_then(Iterator::next) {
+                d_row.write_copy_of_slice(zd);
+            }
             for (o, &win) in i_row.iter_mut().zip(&*zw) {
                 o.write(if win == NONE { EMPTY_ID } else { self.tris[win as usize].id });
             }
@@ -340,7 +343,14 @@ fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [MaybeUnini
 /// Renders the binned triangles into `target` (its buffers reused) with the given kernel and
 /// relative depth tie window (`<= 0` or NaN: exact comparisons); with `bary` false,
 /// `target.bary` is left empty and no barycentrics are computed.
-pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, bary: bool, isa: Isa, target: &mut Target) {
+/// Which of the optional buffers of a [`Target`] to write.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Outputs {
+    pub depth: bool,
+    pub bary: bool,
+}
+
+pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, isa: Isa, target: &mut Target) {
     let grid = binned.grid;
     let len = grid.width as usize * grid.height as usize;
     let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
@@ -350,22 +360,26 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, bary: bool, isa:
     // The buffers are written exactly once each, by the tile that owns the pixel, so they are
     // not initialised first: a fill of 16 bytes per pixel would be a measurable part of the
     // frame.
-    for v in [&mut *depth as &mut dyn Reserve, id, bary_buf] {
-        v.clear_and_reserve(len);
-    }
-    let bary_len = if bary { len } else { 0 };
-    let depth_tiles = grid.split(&mut depth.spare_capacity_mut()[..len]);
+    let (depth_len, bary_len) = (if out.depth { len } else { 0 }, if out.bary { len } else { 0 });
+    depth.clear_and_reserve(depth_len);
+    id.clear_and_reserve(len);
+    bary_buf.clear_and_reserve(bary_len);
+    let depth_tiles: Vec<Option<Rows<f32>>> = if out.depth {
+        grid.split(&mut depth.spare_capacity_mut()[..len]).into_iter().map(Some).collect()
+    } else {
+        (0..grid.count()).map(|_| None).collect()
+    };
     let id_tiles = grid.split(&mut id.spare_capacity_mut()[..len]);
-    let bary_tiles: Vec<Option<Rows<[f32; 2]>>> = if bary {
+    let bary_tiles: Vec<Option<Rows<[f32; 2]>>> = if out.bary {
         grid.split(&mut bary_buf.spare_capacity_mut()[..len]).into_iter().map(Some).collect()
     } else {
         (0..grid.count()).map(|_| None).collect()
     };
     depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).enumerate().for_each_init(
-        ZBuffer::default,
-        |zb, (t, ((depth, id), bary))| {
+        || (ZBuffer::default(), Vec::new()),
+        |(zb, scratch), (t, ((depth, id), bary))| {
             if binned.tile_is_empty(t) {
-                depth.into_iter().flatten().for_each(|d| _ = d.write(empty_depth));
+                depth.into_iter().flatten().flatten().for_each(|d| _ = d.write(empty_depth));
                 id.into_iter().flatten().for_each(|i| _ = i.write(EMPTY_ID));
                 bary.into_iter().flatten().flatten().for_each(|b| _ = b.write([0.0; 2]));
                 return;
@@ -379,17 +393,27 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, bary: bool, isa:
                 (true, true) => zb.draw_all::<true, true>(isa),
             }
             match bary {
-                Some(bary) => zb.resolve(depth, id, bary, isa),
+                Some(bary) => {
+                    // The barycentric kernels write depths too: without a depth buffer, into
+                    // a tile of scratch that stays in this thread's cache.
+                    let depth = depth.unwrap_or_else(|| {
+                        let [x0, y0, x1, y1] = grid.rect(t);
+                        let w = (x1 - x0) as usize;
+                        scratch.resize(w * (y1 - y0) as usize, MaybeUninit::uninit());
+                        scratch.chunks_mut(w).collect()
+                    });
+                    zb.resolve(depth, id, bary, isa)
+                }
                 None => zb.resolve_ids(depth, id),
             }
         },
     );
-    // SAFETY: the first `len` (`bary_len` for `bary`) elements of each buffer are initialised:
-    // `TileGrid::split` cuts them into the rows of the tiles, which partition the image (`tile`
-    // tests), and every tile writes every element of its rows, in the branch above or in
-    // `resolve` (whose runs cover each row) or `resolve_ids`.
+    // SAFETY: the first `len` (`depth_len`, `bary_len` for the optional ones) elements of each
+    // buffer are initialised: `TileGrid::split` cuts them into the rows of the tiles, which
+    // partition the image (`tile` tests), and every tile writes every element of its rows, in
+    // the branch above or in `resolve` (whose runs cover each row) or `resolve_ids`.
     unsafe {
-        depth.set_len(len);
+        depth.set_len(depth_len);
         id.set_len(len);
         bary_buf.set_len(bary_len);
     }
@@ -456,9 +480,11 @@ mod tests {
 
     fn render_with(isa: Isa, tris: &[[Vec4; 3]], ids: &[u32], reversed: bool, tie: f32, tile: u32) -> Target {
         let mut t = Target::empty(0, 0);
-        render_into(isa, tris, ids, reversed, tie, tile, true, &mut t);
+        render_into(isa, tris, ids, reversed, tie, tile, ALL, &mut t);
         t
     }
+
+    const ALL: Outputs = Outputs { depth: true, bary: true };
 
     #[allow(clippy::too_many_arguments)]
     fn render_into(
@@ -468,14 +494,14 @@ mod tests {
         reversed: bool,
         tie: f32,
         tile: u32,
-        bary: bool,
+        out: Outputs,
         target: &mut Target,
     ) {
         let (width, height) = (203, 157);
         let ctx = SetupContext::new(width, height, false);
         let mut chunks = Vec::new();
         let binned = Binned::new(&mut chunks, tris, Some(ids), &ctx, tile, isa);
-        render(&binned, reversed, tie, bary, isa, target);
+        render(&binned, reversed, tie, out, isa, target);
     }
 
     fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
@@ -512,13 +538,35 @@ mod tests {
                         );
                         // Without barycentrics, into the buffers of another frame (the other
                         // depth convention: every stale value differs): the same depths and ids.
-                        render_into(isa, &tris, &ids, !reversed, tie, tile, true, &mut t);
-                        render_into(isa, &tris, &ids, reversed, tie, tile, false, &mut t);
+                        render_into(isa, &tris, &ids, !reversed, tie, tile, ALL, &mut t);
+                        let no_bary = Outputs { depth: true, bary: false };
+                        render_into(isa, &tris, &ids, reversed, tie, tile, no_bary, &mut t);
                         let (d, i, b) = bits(&t);
                         assert!(
                             (&d, &i) == (&reference.0, &reference.1) && b.is_empty(),
                             "no barycentrics: {isa:?}, reversed {reversed}, tie {tie}, tile {tile}"
                         );
+                        // Without depths (the barycentric kernels then write theirs to scratch
+                        // rows), after a frame with them: the same ids and barycentrics.
+                        for bary in [true, false] {
+                            render_into(isa, &tris, &ids, !reversed, tie, tile, ALL, &mut t);
+                            render_into(
+                                isa,
+                                &tris,
+                                &ids,
+                                reversed,
+                                tie,
+                                tile,
+                                Outputs { depth: false, bary },
+                                &mut t,
+                            );
+                            let (d, i, b) = bits(&t);
+                            let expected_bary = if bary { &reference.2[..] } else { &[] };
+                            assert!(
+                                d.is_empty() && i == reference.1 && b == expected_bary,
+                                "no depths, barycentrics {bary}: {isa:?}, reversed {reversed}, tie {tie}, tile {tile}"
+                            );
+                        }
                     }
                 }
             }

@@ -119,3 +119,20 @@ fn identical_for_shuffled_triangle_order() {
     let t = rasterize(&shuffled, &shuffled_ids, cam.width, cam.height, &RasterOptions::default());
     assert!(bits(&t) == reference);
 }
+
+/// `RasterOptions::depth` off: no depth buffer, and the same ids and barycentrics as with it,
+/// on 1 and 2 threads.
+#[test]
+fn without_depths_the_same_ids_and_barycentrics() {
+    let (cam, tris, ids) = scene();
+    let opts = RasterOptions { reversed_z: true, depth_tie: TIES[0], ..Default::default() };
+    let (_, id, bary) = bits(&render_with_threads(1, &tris, &ids, &cam, &opts));
+    for n in [1, 2] {
+        for barycentrics in [true, false] {
+            let off = RasterOptions { depth: false, barycentrics, ..opts };
+            let (d, i, b) = bits(&render_with_threads(n, &tris, &ids, &cam, &off));
+            assert!(d.is_empty() && i == id, "{n} threads, barycentrics {barycentrics}");
+            assert!(b == if barycentrics { &bary[..] } else { &[] }, "{n} threads");
+        }
+    }
+}

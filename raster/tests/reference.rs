@@ -85,8 +85,14 @@ fn rasterize_matches_the_fragment_reference() {
     for reversed_z in [false, true] {
         for (tile_size, cull_backfaces) in [(64, false), (16, true)] {
             for depth_tie in [0.0, 1.0 / 65536.0, 1e-2] {
-                let opts =
-                    RasterOptions { tile_size, cull_backfaces, reversed_z, depth_tie, barycentrics: true };
+                let opts = RasterOptions {
+                    tile_size,
+                    cull_backfaces,
+                    reversed_z,
+                    depth_tie,
+                    barycentrics: true,
+                    depth: true,
+                };
                 let expected = reference(&tris, &ids, cam.width, cam.height, &opts);
                 let covered = expected.id.iter().filter(|&&id| id != EMPTY_ID).count();
                 assert!(covered > 20_000, "{covered} covered pixels");

@@ -18,6 +18,7 @@ const TWO_SIDED: RasterOptions = RasterOptions {
     reversed_z: false,
     depth_tie: 0.0,
     barycentrics: true,
+    depth: true,
 };
 
 /// Every buffer has the right size; a pixel is either empty (id EMPTY_ID, depth EMPTY_DEPTH,

@@ -14,6 +14,7 @@ const CULL: RasterOptions = RasterOptions {
     reversed_z: false,
     depth_tie: 0.0,
     barycentrics: true,
+    depth: true,
 };
 const TWO_SIDED: RasterOptions = RasterOptions {
     tile_size: 64,
@@ -21,6 +22,7 @@ const TWO_SIDED: RasterOptions = RasterOptions {
     reversed_z: false,
     depth_tie: 0.0,
     barycentrics: true,
+    depth: true,
 };
 
 /// Checks a closed sphere mesh seen from outside. Bounds:

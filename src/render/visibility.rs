@@ -46,11 +46,12 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
 
             let t = Instant::now();
             // The tracer's tie rule, so coplanar duplicates resolve alike in both strategies.
-            // No barycentrics: the resolve below recomputes hits exactly from the rays.
+            // No barycentrics nor depths: the resolve below recomputes hits exactly from the rays.
             let opts = RasterOptions {
                 reversed_z: true,
                 depth_tie: hyrt_tracer::DEPTH_TIE,
                 barycentrics: false,
+                depth: false,
                 ..RasterOptions::default()
             };
             rasterizer.rasterize_into(&clip[..n], &ids[..n], w, h, &opts, target);

@@ -2,9 +2,9 @@
 //! triangles.
 //!
 //! It knows nothing about scenes, cameras or lights: it takes triangles already transformed to
-//! clip space (by whatever projection the caller uses: a camera, a shadow-map frustum...) and
-//! returns, per pixel, the visible triangle's id, its depth and its perspective-correct
-//! barycentrics.
+//! clip space (by whatever projection the caller uses: a camera, a shadow-map frustum...), in
+//! slices or made on demand by the setup tasks ([`TriangleSource`]), and returns, per pixel, the
+//! visible triangle's id, its depth and its perspective-correct barycentrics.
 //!
 //! # Conventions
 //!
@@ -61,12 +61,16 @@
 //!
 //! Each stage is one private module whose docs derive its math:
 //!
+//! * `affine.rs`: [`Affine`] maps to clip space, with a vector kernel for whole triangles (for
+//!   callers);
 //! * `clip.rs`: homogeneous clipping (near, far, guard band), barycentrics carried as attributes;
 //! * `setup.rs`: viewport transform, fixed-point snapping and ranges, facing, interpolation
 //!   constants (the unsnapped depth plane and its clamp range, perspective-correct barycentrics);
 //! * `edge.rs`: edge functions, top-left fill rule, 8x8 block rejection/acceptance;
 //! * `setup_simd.rs`: the same setup for 8 triangles at a time with AVX2 or AVX-512;
-//! * `tile.rs`: parallel setup and binning, tiles as disjoint parts of the output buffers;
+//! * `tile.rs`: parallel setup and binning (of slices, or of each chunk made by a
+//!   [`TriangleSource`] on the thread that sets it up), tiles as disjoint parts of the output
+//!   buffers;
 //! * `zbuf.rs`: the per-tile depth test (with the tie window), and barycentrics computed once per
 //!   pixel for the winning triangle;
 //! * `simd.rs`: the same depth test and barycentrics on 8 pixels at a time with AVX2 or AVX-512.
@@ -82,6 +86,7 @@
 //! fragment for large ones) and the resolve (per pixel: two divisions for the barycentrics). See
 //! `benches/raster.rs` (`cargo bench -p hyrt-raster`).
 
+mod affine;
 mod clip;
 mod edge;
 mod setup;
@@ -95,6 +100,7 @@ mod zbuf;
 use glam::Vec4;
 use rayon::prelude::*;
 
+pub use affine::Affine;
 use setup::SetupContext;
 
 /// Id stored in [`Target::id`] for pixels no triangle covers. Triangles with this id are skipped.
@@ -259,6 +265,32 @@ pub fn rasterize(tris: &[[Vec4; 3]], ids: &[u32], width: u32, height: u32, opts:
     target
 }
 
+/// Triangles made on demand, for [`Rasterizer::rasterize_from`]: the setup tasks ask for them a
+/// chunk at a time (a few thousand triangles), each into a buffer of its own, and set them up
+/// at once.
+///
+/// Why: a caller that transforms its triangles to clip space itself (a camera, a shadow-map
+/// face; see [`Affine`]) would otherwise write them all to memory in one parallel pass, and
+/// setup would read them back in the next: megabytes each way, and a wait for the slower
+/// thread in between. Made by the task that sets them up, they are read back from its cache.
+/// The projection stays the caller's.
+pub trait TriangleSource: Sync {
+    /// Number of triangles.
+    fn len(&self) -> usize;
+
+    /// Whether there are no triangles.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Writes triangles `first..first + tris.len()` (of `0..len()`), in clip space, into `tris`
+    /// and their ids into `ids` (the same length). It must write the same values whenever it is
+    /// asked for the same triangles, from whichever thread: then the result is the same for any
+    /// thread count, and the same as [`Rasterizer::rasterize_into`] with all the triangles in
+    /// slices.
+    fn fill(&self, first: usize, tris: &mut [[Vec4; 3]], ids: &mut [u32]);
+}
+
 /// The working memory of [`rasterize`] (set-up triangles and tile bins), kept between frames.
 ///
 /// Why: the bins and set-up triangles of a frame are megabytes; allocated afresh each frame, the
@@ -324,6 +356,34 @@ impl Rasterizer {
         target: &mut Target,
     ) {
         assert_eq!(tris.len(), ids.len(), "one id per triangle");
+        self.rasterize_input(tile::Input::Slice { tris, ids: Some(ids) }, width, height, opts, target);
+    }
+
+    /// [`Rasterizer::rasterize_into`] with the triangles and ids made on demand by `source`
+    /// (see [`TriangleSource`]): the same result as passing them in slices.
+    ///
+    /// # Panics
+    ///
+    /// If a dimension exceeds [`MAX_TARGET_DIM`].
+    pub fn rasterize_from(
+        &mut self,
+        source: &dyn TriangleSource,
+        width: u32,
+        height: u32,
+        opts: &RasterOptions,
+        target: &mut Target,
+    ) {
+        self.rasterize_input(tile::Input::Source(source), width, height, opts, target);
+    }
+
+    fn rasterize_input(
+        &mut self,
+        input: tile::Input,
+        width: u32,
+        height: u32,
+        opts: &RasterOptions,
+        target: &mut Target,
+    ) {
         check_dims(width, height);
         if width == 0 || height == 0 {
             *target = Target::empty(width, height);
@@ -332,8 +392,9 @@ impl Rasterizer {
         }
         let ctx = SetupContext::new(width, height, opts.cull_backfaces);
         let isa = zbuf::Isa::detect();
-        let binned = tile::Binned::new(&mut self.chunks, tris, Some(ids), &ctx, opts.tile_size, isa);
-        (self.submitted, self.used_chunks) = (tris.len(), binned.chunk_count());
+        let submitted = input.len();
+        let binned = tile::Binned::new(&mut self.chunks, input, &ctx, opts.tile_size, isa);
+        (self.submitted, self.used_chunks) = (submitted, binned.chunk_count());
         // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
         let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
         let out = zbuf::Outputs { depth: opts.depth, bary: opts.barycentrics };
@@ -358,7 +419,8 @@ pub fn coverage_count(tris: &[[Vec4; 3]], width: u32, height: u32, opts: &Raster
     }
     let ctx = SetupContext::new(width, height, opts.cull_backfaces);
     let mut chunks = Vec::new();
-    let binned = tile::Binned::new(&mut chunks, tris, None, &ctx, opts.tile_size, zbuf::Isa::detect());
+    let input = tile::Input::Slice { tris, ids: None };
+    let binned = tile::Binned::new(&mut chunks, input, &ctx, opts.tile_size, zbuf::Isa::detect());
     let grid = binned.grid;
     let mut count = vec![0u32; width as usize * height as usize];
     grid.split(&mut count).into_par_iter().enumerate().for_each(|(t, mut rows)| {

@@ -16,6 +16,7 @@
 
 use rayon::prelude::*;
 
+use crate::TriangleSource;
 use crate::edge::BLOCK;
 use crate::setup::{SetupContext, SetupTri, setup_chunk};
 use crate::zbuf::Isa;
@@ -114,7 +115,30 @@ pub(crate) struct Chunk {
     fill: Vec<u32>,
 }
 
+thread_local! {
+    /// A chunk's input made by a [`TriangleSource`], per thread: made and set up by the same
+    /// task, in the same memory for every chunk the thread sets up, it is read back from the
+    /// core's cache.
+    static SOURCED: std::cell::RefCell<(Vec<[Vec4; 3]>, Vec<u32>)> = Default::default();
+}
+
 impl Chunk {
+    /// Sets up `input` (ids `None`: id 0 for all) with the kernel `isa`, replacing `self.tris`.
+    fn set_up(&mut self, input: &[[Vec4; 3]], ids: Option<&[u32]>, ctx: &SetupContext, isa: Isa) {
+        let out = &mut self.tris;
+        out.clear();
+        out.reserve(input.len());
+        match isa {
+            Isa::Scalar => setup_chunk(input, ids, ctx, out),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
+            Isa::Avx2 => unsafe { crate::setup_simd::setup_chunk_avx2(input, ids, ctx, out) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
+            Isa::Avx512 => unsafe { crate::setup_simd::setup_chunk_avx512(input, ids, ctx, out) },
+        }
+    }
+
     /// Bins `self.tris` with a counting sort (two passes over the tile ranges).
     fn bin(&mut self, grid: &TileGrid) {
         let start = &mut self.start;
@@ -160,6 +184,22 @@ pub(crate) fn stats(chunks: &[Chunk]) -> crate::RasterStats {
     }
 }
 
+/// The triangles to set up: slices (ids `None`: id 0 for all), or made chunk by chunk.
+#[derive(Clone, Copy)]
+pub(crate) enum Input<'a> {
+    Slice { tris: &'a [[Vec4; 3]], ids: Option<&'a [u32]> },
+    Source(&'a dyn TriangleSource),
+}
+
+impl Input<'_> {
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            Input::Slice { tris, .. } => tris.len(),
+            Input::Source(source) => source.len(),
+        }
+    }
+}
+
 /// All set-up triangles, binned into the tiles of `grid`.
 pub(crate) struct Binned<'c> {
     pub grid: TileGrid,
@@ -167,41 +207,42 @@ pub(crate) struct Binned<'c> {
 }
 
 impl<'c> Binned<'c> {
-    /// Sets up and bins all triangles in parallel, with the setup kernel `isa`, into `chunks`
-    /// (grown as needed, reused otherwise). With `ids`, triangles with id
-    /// [`EMPTY_ID`](crate::EMPTY_ID) are dropped; `ids: None` uses id 0 for all.
+    /// Sets up and bins all triangles of `input` in parallel, with the setup kernel `isa`, into
+    /// `chunks` (grown as needed, reused otherwise). Triangles with id
+    /// [`EMPTY_ID`](crate::EMPTY_ID) are dropped.
     pub fn new(
         chunks: &'c mut Vec<Chunk>,
-        tris: &[[Vec4; 3]],
-        ids: Option<&[u32]>,
+        input: Input,
         ctx: &SetupContext,
         tile_size: u32,
         isa: Isa,
     ) -> Self {
         let grid = TileGrid::new(ctx.width, ctx.height, effective_tile_size(tile_size));
-        let n = tris.len().div_ceil(SETUP_CHUNK);
+        let len = input.len();
+        let n = len.div_ceil(SETUP_CHUNK);
         if chunks.len() < n {
             chunks.resize_with(n, Chunk::default);
         }
         let chunks = &mut chunks[..n];
-        chunks.par_iter_mut().zip(tris.par_chunks(SETUP_CHUNK)).enumerate().for_each(
-            |(c, (chunk, input))| {
-                let out = &mut chunk.tris;
-                out.clear();
-                out.reserve(input.len());
-                let ids = ids.map(|ids| &ids[c * SETUP_CHUNK..][..input.len()]);
-                match isa {
-                    Isa::Scalar => setup_chunk(input, ids, ctx, out),
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
-                    Isa::Avx2 => unsafe { crate::setup_simd::setup_chunk_avx2(input, ids, ctx, out) },
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
-                    Isa::Avx512 => unsafe { crate::setup_simd::setup_chunk_avx512(input, ids, ctx, out) },
+        chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+            let first = c * SETUP_CHUNK;
+            let count = (len - first).min(SETUP_CHUNK);
+            match input {
+                Input::Slice { tris, ids } => {
+                    chunk.set_up(&tris[first..][..count], ids.map(|ids| &ids[first..][..count]), ctx, isa)
                 }
-                chunk.bin(&grid);
-            },
-        );
+                Input::Source(source) => SOURCED.with_borrow_mut(|(tris, ids)| {
+                    // Grown, never shrunk: every entry below `count` is overwritten.
+                    if tris.len() < count {
+                        tris.resize(count, [Vec4::ZERO; 3]);
+                        ids.resize(count, 0);
+                    }
+                    source.fill(first, &mut tris[..count], &mut ids[..count]);
+                    chunk.set_up(&tris[..count], Some(&ids[..count]), ctx, isa);
+                }),
+            }
+            chunk.bin(&grid);
+        });
         Self { grid, chunks }
     }
 

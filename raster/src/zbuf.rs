@@ -500,7 +500,8 @@ mod tests {
         let (width, height) = (203, 157);
         let ctx = SetupContext::new(width, height, false);
         let mut chunks = Vec::new();
-        let binned = Binned::new(&mut chunks, tris, Some(ids), &ctx, tile, isa);
+        let binned =
+            Binned::new(&mut chunks, crate::tile::Input::Slice { tris, ids: Some(ids) }, &ctx, tile, isa);
         render(&binned, reversed, tie, out, isa, target);
     }
 

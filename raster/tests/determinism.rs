@@ -136,3 +136,47 @@ fn without_depths_the_same_ids_and_barycentrics() {
         }
     }
 }
+
+/// Triangles handed out on demand, a chunk at a time.
+struct Slices<'a>(&'a [[Vec4; 3]], &'a [u32]);
+
+impl hyrt_raster::TriangleSource for Slices<'_> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn fill(&self, first: usize, tris: &mut [[Vec4; 3]], ids: &mut [u32]) {
+        tris.copy_from_slice(&self.0[first..first + tris.len()]);
+        ids.copy_from_slice(&self.1[first..first + ids.len()]);
+    }
+}
+
+/// `Rasterizer::rasterize_from` gives the buffers of `rasterize` with the same triangles in
+/// slices, on 1 to 3 threads, into a target that held another frame.
+#[test]
+fn triangles_from_a_source_give_the_same_buffers() {
+    let (cam, tris, ids) = scene();
+    for opts in [
+        RasterOptions::default(),
+        RasterOptions { reversed_z: true, depth_tie: TIES[0], barycentrics: false, ..Default::default() },
+    ] {
+        let reference = bits(&rasterize(&tris, &ids, cam.width, cam.height, &opts));
+        for n in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+            let mut r = hyrt_raster::Rasterizer::new();
+            let mut target = Target::default();
+            pool.install(|| {
+                r.rasterize_from(
+                    &Slices(&tris[..100], &ids[..100]),
+                    cam.width,
+                    cam.height,
+                    &opts,
+                    &mut target,
+                );
+                r.rasterize_from(&Slices(&tris, &ids), cam.width, cam.height, &opts, &mut target);
+            });
+            assert!(bits(&target) == reference, "{n} threads, {opts:?}");
+            assert_eq!(r.stats().submitted, tris.len());
+        }
+    }
+}

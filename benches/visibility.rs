@@ -4,7 +4,8 @@
 //! `1280x960`, for another size) and prints, measured
 //! side by side in one process (strategies alternated frame by frame, medians):
 //! - the visibility pass alone (`HYRT_BENCH_FRAMES`, default 15 frames each), with the raster
-//!   pass split into transform, rasterization and hit-point resolve;
+//!   pass split into cluster culling, rasterization (with the transform to clip space) and
+//!   hit-point resolve;
 //! - the whole reference frame with each visibility strategy (a third as many frames);
 //! - what the rasterizer processed (triangles submitted after the cluster culling, set up,
 //!   tiny, bin entries) and the CPU time per submitted triangle and per resolved pixel;
@@ -24,7 +25,7 @@ use std::time::Instant;
 use common::{frames, load_640x480, median, scenes, size};
 
 use hyrt::render::{Options, Renderer, Visibility, visibility::ClipTransform};
-use hyrt_raster::{RasterOptions, Rasterizer, Target};
+use hyrt_raster::{RasterOptions, Rasterizer, Target, TriangleSource};
 use hyrt_tracer::{RayCounts, RayKind};
 use rayon::prelude::*;
 
@@ -47,7 +48,7 @@ fn main() {
         let raster = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
 
         let (mut t_rays, mut t_raster) = (Vec::new(), Vec::new());
-        let (mut t_xf, mut t_rz, mut t_rs) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut t_cull, mut t_rz, mut t_rs) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..=frames {
             // Each G-buffer is handed back, as frames do, so neither pass allocates one.
             let t = Instant::now();
@@ -61,7 +62,7 @@ fn main() {
             if i > 0 {
                 t_rays.push(a);
                 t_raster.push(b);
-                t_xf.push(st.time_ms["vis_transform"]);
+                t_cull.push(st.time_ms["vis_cull"]);
                 t_rz.push(st.time_ms["vis_raster"]);
                 t_rs.push(st.time_ms["vis_resolve"]);
             }
@@ -102,7 +103,7 @@ fn main() {
             scene.triangle_count(),
             vr,
             vz,
-            median(&mut t_xf),
+            median(&mut t_cull),
             rz,
             rv,
             vr / vz,
@@ -123,7 +124,7 @@ fn main() {
         }
     }
     println!(
-        "| scene | triangles | visibility ms, rays | visibility ms, raster (transform + raster + resolve) | speed-up | frame ms, rays | frame ms, raster | frame speed-up | rasterizer M tris/s |"
+        "| scene | triangles | visibility ms, rays | visibility ms, raster (cull + raster + resolve) | speed-up | frame ms, rays | frame ms, raster | frame speed-up | rasterizer M tris/s |"
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in vis_rows {
@@ -188,7 +189,6 @@ fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
         t.elapsed().as_secs_f64() * 1e3
     };
     let tris = &scene.positions[mesh.first as usize..][..mesh.count as usize];
-    let ids: Vec<u32> = (mesh.first..mesh.first + mesh.count).collect();
     let xf = ClipTransform::new(&r.camera, r.raster_near);
     let opts = RasterOptions {
         reversed_z: true,
@@ -197,12 +197,12 @@ fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
         depth: false,
         ..RasterOptions::default()
     };
-    let (mut rasterizer, mut target, mut clip) = (Rasterizer::new(), Target::default(), Vec::new());
+    let (mut rasterizer, mut target) = (Rasterizer::new(), Target::default());
+    // As the pass does: transformed by the setup tasks.
     let mut raster = |tris: &[[glam::Vec3; 3]]| {
         let t = Instant::now();
-        clip.clear();
-        clip.par_extend(tris.par_iter().map(|tri| tri.map(|p| xf.apply(p))));
-        rasterizer.rasterize_into(&clip, &ids[..tris.len()], w, h, &opts, &mut target);
+        let source = MeshSource { tris, first_id: mesh.first, xf };
+        rasterizer.rasterize_from(&source, w, h, &opts, &mut target);
         t.elapsed().as_secs_f64() * 1e3
     };
     let (mut t_mine, mut t_raster, mut t_other) = (Vec::new(), Vec::new(), Vec::new());
@@ -227,4 +227,24 @@ fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
         a / b,
         median(&mut t_other)
     ))
+}
+
+/// Consecutive triangles with consecutive ids from `first_id`, transformed on demand.
+struct MeshSource<'a> {
+    tris: &'a [[glam::Vec3; 3]],
+    first_id: u32,
+    xf: ClipTransform,
+}
+
+impl TriangleSource for MeshSource<'_> {
+    fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    fn fill(&self, first: usize, tris: &mut [[glam::Vec4; 3]], ids: &mut [u32]) {
+        self.xf.0.apply_triangles(&self.tris[first..first + tris.len()], tris);
+        for (k, id) in ids.iter_mut().enumerate() {
+            *id = self.first_id + (first + k) as u32;
+        }
+    }
 }

@@ -260,7 +260,7 @@ fn raster_visibility_from_the_cli() {
     let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
     assert_eq!(v["rays"]["primary"], 0);
     assert_eq!(v["options"]["visibility"], "raster");
-    for k in ["visibility", "vis_transform", "vis_raster", "vis_resolve"] {
+    for k in ["visibility", "vis_cull", "vis_raster", "vis_resolve"] {
         assert!(v["time_ms"][k].as_f64().is_some(), "time_ms.{k} missing");
     }
     // What the rasterizer processed: the built-in box's 32 triangles, some set up and binned.

@@ -1125,7 +1125,7 @@ const RAY_ROWS: [RayRow; 8] = [
 fn pass_order<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
     const ORDER: [&str; 15] = [
         "visibility",
-        "vis_transform",
+        "vis_cull",
         "vis_raster",
         "vis_resolve",
         "surface",

@@ -10,10 +10,9 @@
 
 use std::time::Instant;
 
-use glam::Vec4;
-use hyrt_raster::{EMPTY_ID, RasterOptions, Rasterizer, Target};
+use glam::{Vec3, Vec4};
+use hyrt_raster::{Affine, EMPTY_ID, RasterOptions, Rasterizer, Target, TriangleSource};
 use hyrt_tracer::{Hit, RayCounts, RayKind, RowRays};
-use rayon::prelude::*;
 
 use super::{FrameStats, Progress, Renderer, Visibility, cull::CLUSTER, par_rows};
 use crate::camera::CameraRays;
@@ -38,11 +37,10 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
         }
         Visibility::Raster => {
             let mut scratch = r.raster.lock().unwrap_or_else(|e| e.into_inner());
-            let RasterScratch { rasterizer, target, clip, ids, clusters } = &mut *scratch;
+            let RasterScratch { rasterizer, target, clusters } = &mut *scratch;
             let t = Instant::now();
             r.clusters.visible(&r.camera, r.raster_near, clusters);
-            let n = transform(r, clusters, clip, ids);
-            stats.time_ms.insert("vis_transform", super::ms(t));
+            stats.time_ms.insert("vis_cull", super::ms(t));
 
             let t = Instant::now();
             // The tracer's tie rule, so coplanar duplicates resolve alike in both strategies.
@@ -54,7 +52,7 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
                 depth: false,
                 ..RasterOptions::default()
             };
-            rasterizer.rasterize_into(&clip[..n], &ids[..n], w, h, &opts, target);
+            rasterizer.rasterize_from(&ClusterSource::new(r, clusters), w, h, &opts, target);
             stats.time_ms.insert("vis_raster", super::ms(t));
 
             let t = Instant::now();
@@ -88,39 +86,54 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
 pub(crate) struct RasterScratch {
     pub(crate) rasterizer: Rasterizer,
     target: Target,
-    /// Clip-space triangles of the clusters in view and their ids (triangle indices); only the
-    /// first `n` entries (returned by [`transform`]) belong to the current frame.
-    clip: Vec<[Vec4; 3]>,
-    ids: Vec<u32>,
     /// Indices of the clusters in view.
     clusters: Vec<u32>,
 }
 
-/// Transforms the triangles of the clusters `visible` (increasing) to clip space, in input
-/// order, into `clip` and their indices into `ids`; returns their number.
-fn transform(r: &Renderer, visible: &[u32], clip: &mut Vec<[Vec4; 3]>, ids: &mut Vec<u32>) -> usize {
-    let tris = &r.scene.positions;
-    let n: usize = visible.iter().map(|&c| (tris.len() - c as usize * CLUSTER).min(CLUSTER)).sum();
-    // Grown, never shrunk or refilled: every entry below `n` is overwritten.
-    if clip.len() < n {
-        clip.resize(n, [Vec4::ZERO; 3]);
-        ids.resize(n, 0);
+/// The triangles of the clusters in view, in input order with their indices as ids,
+/// transformed to clip space by the rasterizer's setup tasks as they need them
+/// ([`TriangleSource`]).
+///
+/// Why: a transform pass of its own wrote megabytes of clip coordinates that setup then read
+/// back from memory, after waiting for the slower thread.
+struct ClusterSource<'a> {
+    tris: &'a [[Vec3; 3]],
+    /// Increasing cluster indices. Every cluster but the scene's last has exactly CLUSTER
+    /// triangles, and that one, if in view, comes last: triangle `k` of the source is triangle
+    /// `k % CLUSTER` of cluster `visible[k / CLUSTER]`.
+    visible: &'a [u32],
+    len: usize,
+    xf: ClipTransform,
+}
+
+impl<'a> ClusterSource<'a> {
+    fn new(r: &'a Renderer, visible: &'a [u32]) -> Self {
+        let tris = &r.scene.positions;
+        let len = visible.iter().map(|&c| (tris.len() - c as usize * CLUSTER).min(CLUSTER)).sum();
+        Self { tris, visible, len, xf: ClipTransform::new(&r.camera, r.raster_near) }
     }
-    // Every cluster but the last has exactly CLUSTER triangles, and the last one, if in view,
-    // comes last: the chunks of CLUSTER outputs line up with the clusters.
-    let xf = ClipTransform::new(&r.camera, r.raster_near);
-    // 16 clusters (1024 triangles) per task at least: a task per cluster cost more in rayon's
-    // scheduling than the transform itself.
-    let chunks = clip[..n].par_chunks_mut(CLUSTER).zip(ids[..n].par_chunks_mut(CLUSTER)).zip(visible);
-    chunks.with_min_len(16).for_each(|((clip, ids), &c)| {
-        let first = c as usize * CLUSTER;
-        let src = &tris[first..first + clip.len()];
-        for (k, ((out, id), tri)) in clip.iter_mut().zip(ids).zip(src).enumerate() {
-            *out = tri.map(|p| xf.apply(p));
-            *id = (first + k) as u32;
+}
+
+impl TriangleSource for ClusterSource<'_> {
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    fn fill(&self, first: usize, mut clip: &mut [[Vec4; 3]], mut ids: &mut [u32]) {
+        let mut k = first;
+        while !clip.is_empty() {
+            // The rest of the cluster holding triangle `k`, as far as asked.
+            let start = self.visible[k / CLUSTER] as usize * CLUSTER + k % CLUSTER;
+            let n = (CLUSTER - k % CLUSTER).min(self.tris.len() - start).min(clip.len());
+            let (out, rest) = std::mem::take(&mut clip).split_at_mut(n);
+            let (out_ids, rest_ids) = std::mem::take(&mut ids).split_at_mut(n);
+            self.xf.0.apply_triangles(&self.tris[start..start + n], out);
+            for (j, id) in out_ids.iter_mut().enumerate() {
+                *id = (start + j) as u32;
+            }
+            (clip, ids, k) = (rest, rest_ids, k + n);
         }
-    });
-    n
+    }
 }
 
 fn primary_ray(r: &Renderer, x: u32, y: u32, c: &mut RayCounts) -> Option<Hit> {
@@ -161,36 +174,29 @@ pub(crate) fn near_plane(scene: &crate::scene::Scene, camera: &CameraRays) -> f3
 /// `y = v.up / tan_y`, `w = v.forward` give exactly the NDC of the pixel whose ray passes
 /// through `p`. `z = near` for every vertex stores `near / w` (reversed-Z).
 ///
-/// Kept as the images of the three world axes (the columns of the map), so that a vertex is
-/// three 4-wide multiply-adds, `clip = vx cx + vy cy + vz cz + (0, 0, near, 0)`, instead of three
-/// horizontal dot products: the transform was a tenth of the raster pass. The rasterizer's
+/// Kept as the images of the three world axes (the columns of an [`Affine`] map), so that a
+/// vertex is three 4-wide multiply-adds, `clip = vx cx + vy cy + vz cz + (0, 0, near, 0)`,
+/// instead of three horizontal dot products, and a triangle a few 16-wide ones
+/// ([`Affine::apply_triangles`]): the transform was a tenth of the raster pass. The rasterizer's
 /// coverage and exact-depth plane are both relative to these clip coordinates, so their
 /// rounding needs to match nothing else (the frustum culling's margin covers it, `cull.rs`).
 #[derive(Clone, Copy, Debug)]
-pub struct ClipTransform {
-    eye: glam::Vec3,
-    columns: [Vec4; 3],
-    near: Vec4,
-}
+pub struct ClipTransform(pub Affine);
 
 impl ClipTransform {
     pub fn new(cam: &CameraRays, near: f32) -> Self {
         let (x, y, w) = (cam.right * cam.inv_tan_x, cam.up * cam.inv_tan_y, cam.forward);
-        Self {
-            eye: cam.eye,
+        Self(Affine {
+            origin: cam.eye,
             columns: [0, 1, 2].map(|k| Vec4::new(x[k], y[k], 0.0, w[k])),
-            near: Vec4::new(0.0, 0.0, near, 0.0),
-        }
+            offset: Vec4::new(0.0, 0.0, near, 0.0),
+        })
     }
 
     /// Clip-space position of `p`.
     #[inline(always)]
     pub fn apply(&self, p: glam::Vec3) -> Vec4 {
-        // Scalar differences: widening `p` to a `Vec4` first went through the stack, a
-        // store-forwarding stall per vertex.
-        let v = p - self.eye;
-        let [cx, cy, cz] = self.columns;
-        cx * v.x + cy * v.y + cz * v.z + self.near
+        self.0.apply(p)
     }
 }
 
@@ -206,6 +212,45 @@ mod tests {
 
     use super::*;
     use crate::{render::Options, scene::Camera};
+
+    /// The source hands out the triangles of the clusters in view in order, with their indices
+    /// as ids and `ClipTransform::apply`'s clip coordinates, for any window the setup tasks ask
+    /// for: across cluster boundaries and into a last, shorter cluster.
+    #[test]
+    fn cluster_source_fills_any_window_with_the_clusters_triangles() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        // 11 copies of the box's 32 triangles, shifted: 5 full clusters and one of 32.
+        let n = scene.positions.len();
+        for copy in 1..11 {
+            for i in 0..n {
+                let shift = Vec3::splat(copy as f32 * 0.01);
+                scene.positions.push(scene.positions[i].map(|p| p + shift));
+                scene.normals.push(scene.normals[i]);
+                scene.material.push(scene.material[i]);
+            }
+        }
+        assert_eq!(scene.positions.len(), 5 * CLUSTER + 32);
+        let r = Renderer::new(&scene, Options::default());
+        let visible = [0u32, 2, 3, 5];
+        let source = ClusterSource::new(&r, &visible);
+        let expected: Vec<usize> = visible
+            .iter()
+            .flat_map(|&c| c as usize * CLUSTER..(c as usize * CLUSTER + CLUSTER).min(352))
+            .collect();
+        assert_eq!(source.len(), expected.len());
+        let xf = ClipTransform::new(&r.camera, r.raster_near);
+        let bits = |t: &[Vec4; 3]| t.map(|v| v.to_array().map(f32::to_bits));
+        for (first, len) in [(0, expected.len()), (50, 80), (190, 34), (0, 1), (63, 2), (127, 66)] {
+            let mut clip = vec![[Vec4::NAN; 3]; len];
+            let mut ids = vec![u32::MAX; len];
+            source.fill(first, &mut clip, &mut ids);
+            for (k, (t, &id)) in clip.iter().zip(&ids).enumerate() {
+                let want = expected[first + k];
+                assert_eq!(id as usize, want, "window ({first}, {len}), entry {k}");
+                assert_eq!(bits(t), bits(&scene.positions[want].map(|p| xf.apply(p))));
+            }
+        }
+    }
 
     /// `row_rays` must reproduce `Renderer::camera_ray` exactly, or raster and ray hits would
     /// no longer be bit-identical: every pixel of odd image sizes and cameras, including a

@@ -98,7 +98,7 @@ fn main() {
             cpu_ns(rv, (scene.settings.width * scene.settings.height) as usize),
         ));
         vis_rows.push(format!(
-            "| {} | {} | {:.1} | {:.1} ({:.1} + {:.1} + {:.1}) | {:.1}x | {:.0} | {:.0} | {:.2}x | {:.1} |",
+            "| {} | {} | {:.1} | {:.1} ({:.2} + {:.1} + {:.1}) | {:.1}x | {:.0} | {:.0} | {:.2}x | {:.1} |",
             scene.name,
             scene.triangle_count(),
             vr,

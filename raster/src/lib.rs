@@ -287,7 +287,7 @@ pub trait TriangleSource: Sync {
     /// and their ids into `ids` (the same length). It must write the same values whenever it is
     /// asked for the same triangles, from whichever thread: then the result is the same for any
     /// thread count, and the same as [`Rasterizer::rasterize_into`] with all the triangles in
-    /// slices.
+    /// slices. It may run parallel work (rayon) of its own.
     fn fill(&self, first: usize, tris: &mut [[Vec4; 3]], ids: &mut [u32]);
 }
 

@@ -231,15 +231,23 @@ impl<'c> Binned<'c> {
                 Input::Slice { tris, ids } => {
                     chunk.set_up(&tris[first..][..count], ids.map(|ids| &ids[first..][..count]), ctx, isa)
                 }
-                Input::Source(source) => SOURCED.with_borrow_mut(|(tris, ids)| {
-                    // Grown, never shrunk: every entry below `count` is overwritten.
-                    if tris.len() < count {
-                        tris.resize(count, [Vec4::ZERO; 3]);
-                        ids.resize(count, 0);
-                    }
-                    source.fill(first, &mut tris[..count], &mut ids[..count]);
-                    chunk.set_up(&tris[..count], Some(&ids[..count]), ctx, isa);
-                }),
+                Input::Source(source) => {
+                    let mut make = |(tris, ids): &mut (Vec<[Vec4; 3]>, Vec<u32>)| {
+                        // Grown, never shrunk: every entry below `count` is overwritten.
+                        if tris.len() < count {
+                            tris.resize(count, [Vec4::ZERO; 3]);
+                            ids.resize(count, 0);
+                        }
+                        source.fill(first, &mut tris[..count], &mut ids[..count]);
+                        chunk.set_up(&tris[..count], Some(&ids[..count]), ctx, isa);
+                    };
+                    SOURCED.with(|buffer| match buffer.try_borrow_mut() {
+                        Ok(mut buffer) => make(&mut buffer),
+                        // In use: a `fill` that runs parallel work of its own let this thread
+                        // take another chunk while it waited.
+                        Err(_) => make(&mut Default::default()),
+                    })
+                }
             }
             chunk.bin(&grid);
         });

@@ -340,9 +340,6 @@ fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [MaybeUnini
     }
 }
 
-/// Renders the binned triangles into `target` (its buffers reused) with the given kernel and
-/// relative depth tie window (`<= 0` or NaN: exact comparisons); with `bary` false,
-/// `target.bary` is left empty and no barycentrics are computed.
 /// Which of the optional buffers of a [`Target`] to write.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Outputs {
@@ -350,6 +347,10 @@ pub(crate) struct Outputs {
     pub bary: bool,
 }
 
+/// Renders the binned triangles into `target` (its buffers reused) with the given kernel and
+/// relative depth tie window (`<= 0` or NaN: exact comparisons); the buffers `out` leaves out
+/// (`target.depth`, `target.bary`) are left empty, and no barycentrics are computed without
+/// `out.bary`.
 pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, isa: Isa, target: &mut Target) {
     let grid = binned.grid;
     let len = grid.width as usize * grid.height as usize;

@@ -151,6 +151,39 @@ impl hyrt_raster::TriangleSource for Slices<'_> {
     }
 }
 
+/// A source whose `fill` lets rayon run other work, as parallel work of its own would while it
+/// waits: its thread then takes another chunk, and sets it up inside the first one's `fill`.
+struct YieldingSlices<'a>(&'a [[Vec4; 3]], &'a [u32], std::sync::atomic::AtomicUsize);
+
+impl hyrt_raster::TriangleSource for YieldingSlices<'_> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn fill(&self, first: usize, tris: &mut [[Vec4; 3]], ids: &mut [u32]) {
+        if rayon::yield_now() == Some(rayon::Yield::Executed) {
+            self.2.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        tris.copy_from_slice(&self.0[first..first + tris.len()]);
+        ids.copy_from_slice(&self.1[first..first + ids.len()]);
+    }
+}
+
+#[test]
+fn a_source_may_run_other_work_while_filling() {
+    let (cam, tris, ids) = scene();
+    let opts = RasterOptions::default();
+    let reference = bits(&rasterize(&tris, &ids, cam.width, cam.height, &opts));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let source = YieldingSlices(&tris, &ids, Default::default());
+    let mut target = Target::default();
+    let mut r = hyrt_raster::Rasterizer::new();
+    pool.install(|| r.rasterize_from(&source, cam.width, cam.height, &opts, &mut target));
+    assert!(bits(&target) == reference);
+    // Not vacuous: some chunk was set up inside another's `fill`.
+    assert!(source.2.into_inner() > 0, "no fill ran other work");
+}
+
 /// `Rasterizer::rasterize_from` gives the buffers of `rasterize` with the same triangles in
 /// slices, on 1 to 3 threads, into a target that held another frame.
 #[test]

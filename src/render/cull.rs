@@ -15,7 +15,7 @@
 //! so their maximum over the box is at a corner: every vertex is beyond the plane too, so the
 //! triangle (convex) covers no pixel centre and the rasterizer would have written nothing for
 //! it. The margin covers the rounding of the `f32` clip coordinates the rasterizer receives (see
-//! [`Frustum::culls`]). Kept triangles stay in input order with their own ids, so the
+//! `Frustum::culls`). Kept triangles stay in input order with their own ids, so the
 //! rasterized buffers are bit-identical with and without culling (tested).
 
 use glam::{DVec3, Vec3};

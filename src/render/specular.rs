@@ -17,7 +17,7 @@ use super::{Progress, Renderer, SurfaceHit, direct, indirect::Vpls, shadows::Sha
 /// light's map (and every VPL's) at its position and casts shadow rays from it: in pixel order
 /// those lookups jump across maps of up to a gigabyte, in spatial order neighbouring hits read
 /// neighbouring texels and traverse the same BVH nodes. Each path is still its own pixel's sum,
-/// accumulated in the same order as [`reflected`] does it: the image is bit-identical.
+/// accumulated in the same order as `reflected` does it: the image is bit-identical.
 pub fn run(
     r: &Renderer,
     gbuffer: &[Option<Hit>],

@@ -24,8 +24,11 @@ use std::time::Instant;
 
 use common::{frames, load_640x480, median, scenes, size};
 
-use hyrt::render::{Options, Renderer, Visibility, visibility::ClipTransform};
-use hyrt_raster::{RasterOptions, Rasterizer, Target, TriangleSource};
+use hyrt::render::{
+    Options, Renderer, Visibility,
+    visibility::{ClipTransform, raster_options},
+};
+use hyrt_raster::{Rasterizer, Target, TriangleSource};
 use hyrt_tracer::{RayCounts, RayKind};
 use rayon::prelude::*;
 
@@ -190,13 +193,7 @@ fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
     };
     let tris = &scene.positions[mesh.first as usize..][..mesh.count as usize];
     let xf = ClipTransform::new(&r.camera, r.raster_near);
-    let opts = RasterOptions {
-        reversed_z: true,
-        depth_tie: hyrt_tracer::DEPTH_TIE,
-        barycentrics: false,
-        depth: false,
-        ..RasterOptions::default()
-    };
+    let opts = raster_options();
     let (mut rasterizer, mut target) = (Rasterizer::new(), Target::default());
     // As the pass does: transformed by the setup tasks.
     let mut raster = |tris: &[[glam::Vec3; 3]]| {

@@ -43,16 +43,7 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
             stats.time_ms.insert("vis_cull", super::ms(t));
 
             let t = Instant::now();
-            // The tracer's tie rule, so coplanar duplicates resolve alike in both strategies.
-            // No barycentrics nor depths: the resolve below recomputes hits exactly from the rays.
-            let opts = RasterOptions {
-                reversed_z: true,
-                depth_tie: hyrt_tracer::DEPTH_TIE,
-                barycentrics: false,
-                depth: false,
-                ..RasterOptions::default()
-            };
-            rasterizer.rasterize_from(&ClusterSource::new(r, clusters), w, h, &opts, target);
+            rasterizer.rasterize_from(&ClusterSource::new(r, clusters), w, h, &raster_options(), target);
             stats.time_ms.insert("vis_raster", super::ms(t));
 
             let t = Instant::now();
@@ -78,6 +69,19 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
         }
     }
     gbuffer
+}
+
+/// The rasterizer's options for the visibility pass: reversed-Z ([`ClipTransform`]), and the
+/// tracer's tie rule, so that coplanar duplicates resolve alike in both strategies. No
+/// barycentrics nor depths: the resolve recomputes each hit exactly from the pixel's ray.
+pub fn raster_options() -> RasterOptions {
+    RasterOptions {
+        reversed_z: true,
+        depth_tie: hyrt_tracer::DEPTH_TIE,
+        barycentrics: false,
+        depth: false,
+        ..RasterOptions::default()
+    }
 }
 
 /// The buffers of the raster pass, kept from frame to frame: freshly allocated, megabytes of

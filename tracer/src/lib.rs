@@ -95,7 +95,14 @@ impl Tracer {
     /// exactly one leaf; the `parallel` feature is off, which the project pins so the tree is
     /// the same on every machine).
     ///
-    /// Triangles with a non-finite coordinate are left out (they can never be hit).
+    /// Left out of the BVH, as they can never be reported (every query answers as if they were
+    /// there): triangles with a non-finite coordinate; triangles whose three corners are equal
+    /// (their edge functions all vanish, exactly, so `det = 0`); and repeats of an earlier
+    /// triangle corner for corner (same corners in the same order): for every ray both meet
+    /// the same edges with bit-identical arithmetic at the same distance, a tie that the
+    /// earlier one, with the smaller id, wins. Why bother: tens of thousands of coincident
+    /// boxes (a mesh collapsed to a point, a part pasted many times in place) made obvhs's
+    /// build quadratic and its recursive tree conversion overflow the stack.
     ///
     /// **Scale.** obvhs culls BVH nodes whose exit distance is below an absolute `1e-4`
     /// (`cwbvh::node::EPSILON`), which would lose contact hits in a scene measured in metres
@@ -118,8 +125,11 @@ impl Tracer {
         };
         let mut kept = Vec::with_capacity(tris.len());
         let mut kept_ids = Vec::with_capacity(tris.len());
+        let mut seen = std::collections::HashSet::with_capacity(tris.len());
+        let bits = |t: &[Vec3; 3]| t.map(|p| p.to_array().map(f32::to_bits));
         for (i, t) in tris.iter().enumerate() {
-            if t.iter().all(|p| p.is_finite()) {
+            let point = t[0] == t[1] && t[1] == t[2];
+            if t.iter().all(|p| p.is_finite()) && !point && seen.insert(bits(t)) {
                 kept.push(Triangle {
                     v0: Vec3A::from(t[0] * scale),
                     v1: Vec3A::from(t[1] * scale),
@@ -153,6 +163,11 @@ impl Tracer {
     /// Number of triangles given to [`Tracer::build`].
     pub fn triangle_count(&self) -> usize {
         self.by_id.len()
+    }
+
+    /// Number of those in the BVH (see [`Tracer::build`] for the ones left out).
+    pub fn bvh_triangle_count(&self) -> usize {
+        self.tris.len()
     }
 
     /// The internal power-of-two scale (exposed for tests).

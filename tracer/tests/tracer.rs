@@ -165,6 +165,41 @@ fn degenerate_and_non_finite_triangles_are_never_hit_and_do_not_panic() {
     assert!(!tracer.occluded(&bad, RayKind::Shadow, &mut counts));
 }
 
+/// A mesh collapsed to a point and a part pasted many times in place: 60,000 coincident boxes
+/// each. Before such triangles were left out, obvhs took seconds per 10,000 coincident boxes
+/// (quadratic) and its recursive tree conversion overflowed the stack from about 50,000 (this
+/// test's thread has Rust's default 2 MiB; an overflow aborts the whole test binary).
+#[test]
+fn coincident_triangles_build_and_answer_as_one() {
+    let p = vec3(0.25, 0.5, 0.0);
+    let tri = [vec3(-1.0, -1.0, 0.0), vec3(1.0, -1.0, 0.0), vec3(0.0, 1.0, 0.0)];
+    const N: usize = 60_000;
+    let mut tris = grid(4).into_iter().map(|t| t.map(|q| q + vec3(10.0, 0.0, 0.0))).collect::<Vec<_>>();
+    let first = tris.len() as u32;
+    // Interleaved, so each repeat and each point is preceded by the first copy of the triangle.
+    for _ in 0..N {
+        tris.push(tri);
+        tris.push([p; 3]);
+    }
+    // A repeat with its corners rotated is not the same sequence of operations: kept.
+    let rotated = [tri[1], tri[2], tri[0]];
+    tris.push(rotated);
+    let tracer = Tracer::build(&tris);
+    assert_eq!(tracer.triangle_count(), tris.len());
+    assert_eq!(tracer.bvh_triangle_count(), 4 * 4 * 2 + 2, "grid, one copy, the rotated one");
+
+    let mut counts = RayCounts::default();
+    for (o, d) in [(vec3(0.1, 0.0, 5.0), vec3(0.0, 0.0, -1.0)), (vec3(0.1, 0.2, -3.0), vec3(0.0, 0.0, 1.0))] {
+        let ray = Ray::new(o, d, f32::INFINITY);
+        let hit = tracer.closest_hit(&ray, RayKind::Primary, &mut counts).unwrap();
+        assert_eq!(hit.tri, first, "the first copy wins the tie");
+        assert!(tracer.occluded(&ray, RayKind::Shadow, &mut counts));
+    }
+    // Through the point, along the plane: nothing (the point has no area).
+    let ray = Ray::new(p - vec3(5.0, 0.0, 0.0), Vec3::X, 9.0);
+    assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut counts), None);
+}
+
 #[test]
 fn hint_test_matches_full_traversal() {
     let tris = grid(4);

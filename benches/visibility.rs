@@ -14,7 +14,10 @@
 //! - the densest mesh of each scene (most triangles per pixel it is seen at): primary rays over
 //!   its pixels against rasterizing its triangles alone, and rays over the other pixels. It
 //!   shows where the 10x target is lost: a mesh with more triangles than pixels costs the
-//!   rasterizer per triangle what it costs rays per pixel.
+//!   rasterizer per triangle what it costs rays per pixel;
+//! - the ceiling of the speed-up: the raster pass on the same scene with its dense meshes (at
+//!   least one triangle per pixel that sees them) left out, against rays over the whole scene.
+//!   No improvement of the rasterizer on those meshes can beat it.
 //!
 //! Threads: all cores (`RAYON_NUM_THREADS` to change). Scenes: `HYRT_BENCH_SCENES`.
 
@@ -44,6 +47,7 @@ fn main() {
     let mut ray_rows = Vec::new();
     let mut work_rows = Vec::new();
     let mut dense_rows = Vec::new();
+    let mut ceiling_rows = Vec::new();
     for spec in scenes() {
         let Some(mut scene) = load_640x480(&spec) else { continue };
         (scene.settings.width, scene.settings.height) = (width, height);
@@ -83,7 +87,9 @@ fn main() {
             s_raster = Some(f.stats.rays);
         }
         let work = raster.raster_stats();
-        dense_rows.extend(densest_mesh(&raster, frames));
+        let seen_by = mesh_pixels(&raster);
+        dense_rows.extend(densest_mesh(&raster, &seen_by, frames));
+        ceiling_rows.extend(ceiling(&rays, &seen_by, frames));
         let (vr, vz) = (median(&mut t_rays), median(&mut t_raster));
         let (fr, fz) = (median(&mut f_rays), median(&mut f_raster));
         let (rz, rv) = (median(&mut t_rz), median(&mut t_rs));
@@ -147,6 +153,13 @@ fn main() {
     for r in dense_rows {
         println!("{r}");
     }
+    println!(
+        "\n| scene | dense meshes (>= 1 triangle per pixel seeing them) | their triangles | pixels seeing them | rays over the whole scene, ms | raster pass without them, ms | speed-up ceiling |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|");
+    for r in ceiling_rows {
+        println!("{r}");
+    }
     println!("\n| scene | visibility | primary | shadow | specular | total |");
     println!("|---|---|---:|---:|---:|---:|");
     for r in ray_rows {
@@ -154,23 +167,42 @@ fn main() {
     }
 }
 
+/// Per mesh of `r`'s scene, the pixels that see it (raster visibility).
+fn mesh_pixels(r: &Renderer) -> Vec<usize> {
+    let meshes = &r.scene.meshes;
+    // Mesh ranges are disjoint but need not cover every triangle, nor come in order.
+    let mut mesh_of = vec![u32::MAX; r.scene.positions.len()];
+    for (i, m) in meshes.iter().enumerate() {
+        mesh_of[m.first as usize..][..m.count as usize].fill(i as u32);
+    }
+    let (gbuffer, _) = r.visibility();
+    let mut pixels = vec![0; meshes.len()];
+    for hit in gbuffer.iter().flatten() {
+        if let Some(&m) = mesh_of.get(hit.tri as usize).filter(|&&m| m != u32::MAX) {
+            pixels[m as usize] += 1;
+        }
+    }
+    r.recycle_gbuffer(gbuffer);
+    pixels
+}
+
 /// The mesh with the most triangles per pixel that sees it (among meshes seen by at least 1 %
-/// of the pixels), timed alone: primary rays over its pixels, the rasterizer (transform to clip
-/// space, setup, depth test; the renderer's options) over its triangles less an empty frame, and
-/// rays over the other pixels; alternated, medians of `frames`. `None` if no mesh qualifies.
-fn densest_mesh(r: &Renderer, frames: usize) -> Option<String> {
+/// of the pixels, `seen_by` of [`mesh_pixels`]), timed alone: primary rays over its pixels, the
+/// rasterizer (transform to clip space, setup, depth test; the renderer's options) over its
+/// triangles less an empty frame, and rays over the other pixels; alternated, medians of
+/// `frames`. `None` if no mesh qualifies.
+fn densest_mesh(r: &Renderer, seen_by: &[usize], frames: usize) -> Option<String> {
     let scene = r.scene;
     let (w, h) = (scene.settings.width, scene.settings.height);
-    let (gbuffer, _) = r.visibility();
     let seen = |m: &hyrt::scene::MeshRange, id: u32| id >= m.first && id - m.first < m.count;
-    let pixels = |m: &hyrt::scene::MeshRange| gbuffer.iter().flatten().filter(|hit| seen(m, hit.tri)).count();
     let min_pixels = (w * h / 100) as usize;
     let (mesh, count) = scene
         .meshes
         .iter()
-        .map(|m| (m, pixels(m)))
+        .zip(seen_by.iter().copied())
         .filter(|&(_, n)| n >= min_pixels.max(1))
         .max_by(|a, b| (a.0.count as f64 / a.1 as f64).total_cmp(&(b.0.count as f64 / b.1 as f64)))?;
+    let (gbuffer, _) = r.visibility();
     let (mine, other): (Vec<u32>, Vec<u32>) =
         (0..w * h).partition(|&k| gbuffer[k as usize].is_some_and(|hit| seen(mesh, hit.tri)));
     r.recycle_gbuffer(gbuffer);
@@ -244,4 +276,61 @@ impl TriangleSource for MeshSource<'_> {
             *id = self.first_id + (first + k) as u32;
         }
     }
+}
+
+/// The ceiling of the raster pass's speed-up over `rays` (a renderer with ray visibility): the
+/// pass on a copy of the scene whose dense meshes (seen by at least one pixel, with at least as
+/// many triangles as pixels seeing them; `seen_by` of [`mesh_pixels`]) have every vertex moved
+/// behind the camera, so that the cluster culling drops them, timed against rays over the whole
+/// scene; alternated, each raster pass after a ray pass as in the main table, medians of
+/// `frames`. Their pixels are still resolved (on what lies behind them). `None` if the scene has
+/// no dense mesh.
+fn ceiling(rays: &Renderer, seen_by: &[usize], frames: usize) -> Option<String> {
+    let scene = rays.scene;
+    let dense: Vec<_> = scene
+        .meshes
+        .iter()
+        .zip(seen_by.iter().copied())
+        .filter(|&(m, n)| n > 0 && m.count as usize >= n)
+        .collect();
+    if dense.is_empty() {
+        return None;
+    }
+    let mut without = scene.clone();
+    let behind = rays.camera.eye - rays.camera.forward;
+    for (m, _) in &dense {
+        without.positions[m.first as usize..][..m.count as usize].fill([behind; 3]);
+    }
+    let raster = Renderer::new(&without, Options { visibility: Visibility::Raster, ..Options::default() });
+    let (mut t_rays, mut t_raster) = (Vec::new(), Vec::new());
+    for i in 0..=frames {
+        let t = Instant::now();
+        let (g, _) = rays.visibility();
+        let a = t.elapsed().as_secs_f64() * 1e3;
+        rays.recycle_gbuffer(g);
+        let t = Instant::now();
+        let (g, _) = raster.visibility();
+        let b = t.elapsed().as_secs_f64() * 1e3;
+        raster.recycle_gbuffer(g);
+        if i > 0 {
+            t_rays.push(a);
+            t_raster.push(b);
+        }
+    }
+    // The three largest by name, and how many more.
+    let mut by_size = dense.clone();
+    by_size.sort_by_key(|(m, _)| std::cmp::Reverse(m.count));
+    let mut names: Vec<String> = by_size.iter().take(3).map(|(m, _)| m.name.clone()).collect();
+    if dense.len() > 3 {
+        names.push(format!("{} more", dense.len() - 3));
+    }
+    let (a, b) = (median(&mut t_rays), median(&mut t_raster));
+    Some(format!(
+        "| {} | {} | {} | {} | {a:.1} | {b:.2} | {:.1}x |",
+        scene.name,
+        names.join(", "),
+        dense.iter().map(|(m, _)| m.count as usize).sum::<usize>(),
+        dense.iter().map(|&(_, n)| n).sum::<usize>(),
+        a / b
+    ))
 }

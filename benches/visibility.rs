@@ -318,7 +318,7 @@ fn ceiling(rays: &Renderer, seen_by: &[usize], frames: usize) -> Option<String> 
             t_raster.push(b);
         }
     }
-    // The three largest by name, and how many more.
+    // The names of the three largest, and how many more.
     let mut by_size = dense.clone();
     by_size.sort_by_key(|(m, _)| std::cmp::Reverse(m.count));
     let mut names: Vec<String> = by_size.iter().take(3).map(|(m, _)| m.name.clone()).collect();

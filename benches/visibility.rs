@@ -57,15 +57,8 @@ fn main() {
         let (mut t_rays, mut t_raster) = (Vec::new(), Vec::new());
         let (mut t_cull, mut t_rz, mut t_rs) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..=frames {
-            // Each G-buffer is handed back, as frames do, so neither pass allocates one.
-            let t = Instant::now();
-            let (g, _) = rays.visibility();
-            let a = t.elapsed().as_secs_f64() * 1e3;
-            rays.recycle_gbuffer(g);
-            let t = Instant::now();
-            let (g, st) = raster.visibility();
-            let b = t.elapsed().as_secs_f64() * 1e3;
-            raster.recycle_gbuffer(g);
+            let (a, _) = timed_visibility(&rays);
+            let (b, st) = timed_visibility(&raster);
             if i > 0 {
                 t_rays.push(a);
                 t_raster.push(b);
@@ -165,6 +158,16 @@ fn main() {
     for r in ray_rows {
         println!("{r}");
     }
+}
+
+/// One visibility pass of `r`: its wall time in ms, and its stats. The G-buffer is handed back,
+/// as frames do, so no pass allocates one.
+fn timed_visibility(r: &Renderer) -> (f64, hyrt::render::FrameStats) {
+    let t = Instant::now();
+    let (g, stats) = r.visibility();
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    r.recycle_gbuffer(g);
+    (ms, stats)
 }
 
 /// Per mesh of `r`'s scene, the pixels that see it (raster visibility).
@@ -305,14 +308,8 @@ fn ceiling(rays: &Renderer, seen_by: &[usize], frames: usize) -> Option<String> 
     let raster = Renderer::new(&without, Options { visibility: Visibility::Raster, ..Options::default() });
     let (mut t_rays, mut t_raster) = (Vec::new(), Vec::new());
     for i in 0..=frames {
-        let t = Instant::now();
-        let (g, _) = rays.visibility();
-        let a = t.elapsed().as_secs_f64() * 1e3;
-        rays.recycle_gbuffer(g);
-        let t = Instant::now();
-        let (g, _) = raster.visibility();
-        let b = t.elapsed().as_secs_f64() * 1e3;
-        raster.recycle_gbuffer(g);
+        let (a, _) = timed_visibility(rays);
+        let (b, _) = timed_visibility(&raster);
         if i > 0 {
             t_rays.push(a);
             t_raster.push(b);

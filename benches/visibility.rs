@@ -39,7 +39,7 @@ fn main() {
     let frames = frames(15);
     let (width, height) = size();
     println!(
-        "primary visibility at {width}x{height}, {} threads; visibility medians of {frames} frames, whole frames of {}\n",
+        "primary visibility at {width}x{height}, {} threads; visibility medians of {frames} frames, whole frames of {}",
         rayon::current_num_threads(),
         frames.div_ceil(3)
     );
@@ -80,8 +80,11 @@ fn main() {
             s_raster = Some(f.stats.rays);
         }
         let work = raster.raster_stats();
-        let seen_by = mesh_pixels(&raster);
-        dense_rows.extend(densest_mesh(&raster, &seen_by, frames));
+        // One G-buffer for both per-mesh analyses.
+        let (gbuffer, _) = raster.visibility();
+        let seen_by = mesh_pixels(&raster, &gbuffer);
+        dense_rows.extend(densest_mesh(&raster, &gbuffer, &seen_by, frames));
+        raster.recycle_gbuffer(gbuffer);
         ceiling_rows.extend(ceiling(&rays, &seen_by, frames));
         let (vr, vz) = (median(&mut t_rays), median(&mut t_raster));
         let (fr, fz) = (median(&mut f_rays), median(&mut f_raster));
@@ -125,37 +128,37 @@ fn main() {
             ));
         }
     }
-    println!(
-        "| scene | triangles | visibility ms, rays | visibility ms, raster (cull + raster + resolve) | speed-up | frame ms, rays | frame ms, raster | frame speed-up | rasterizer M tris/s |"
+    table(
+        "| scene | triangles | visibility ms, rays | visibility ms, raster (cull + raster + resolve) | speed-up | frame ms, rays | frame ms, raster | frame speed-up | rasterizer M tris/s |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        &vis_rows,
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
-    for r in vis_rows {
-        println!("{r}");
-    }
-    println!(
-        "\n| scene | triangles submitted | set up | of which tiny (<= 2x2 px) | bin entries | raster ns per submitted triangle and core | resolve ns per pixel and core |"
+    table(
+        "| scene | triangles submitted | set up | of which tiny (<= 2x2 px) | bin entries | raster ns per submitted triangle and core | resolve ns per pixel and core |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+        &work_rows,
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|");
-    for r in work_rows {
-        println!("{r}");
-    }
-    println!(
-        "\n| scene | densest mesh | triangles | pixels seeing it | rays over its pixels, ms | rasterizing its triangles, ms | speed-up there | rays over the other pixels, ms |"
+    table(
+        "| scene | densest mesh | triangles | pixels seeing it | rays over its pixels, ms | rasterizing its triangles, ms | speed-up there | rays over the other pixels, ms |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
+        &dense_rows,
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
-    for r in dense_rows {
-        println!("{r}");
-    }
-    println!(
-        "\n| scene | dense meshes (>= 1 triangle per pixel seeing them) | their triangles | pixels seeing them | rays over the whole scene, ms | raster pass without them, ms | speed-up ceiling |"
+    table(
+        "| scene | dense meshes (>= 1 triangle per pixel seeing them) | their triangles | pixels seeing them | rays over the whole scene, ms | raster pass without them, ms | speed-up ceiling |",
+        "|---|---|---:|---:|---:|---:|---:|",
+        &ceiling_rows,
     );
-    println!("|---|---|---:|---:|---:|---:|---:|");
-    for r in ceiling_rows {
-        println!("{r}");
-    }
-    println!("\n| scene | visibility | primary | shadow | specular | total |");
-    println!("|---|---|---:|---:|---:|---:|");
-    for r in ray_rows {
+    table(
+        "| scene | visibility | primary | shadow | specular | total |",
+        "|---|---|---:|---:|---:|---:|",
+        &ray_rows,
+    );
+}
+
+/// A Markdown table: `header` and `separator` lines, then `rows`, after a blank line.
+fn table(header: &str, separator: &str, rows: &[String]) {
+    println!("\n{header}\n{separator}");
+    for r in rows {
         println!("{r}");
     }
 }
@@ -170,31 +173,34 @@ fn timed_visibility(r: &Renderer) -> (f64, hyrt::render::FrameStats) {
     (ms, stats)
 }
 
-/// Per mesh of `r`'s scene, the pixels that see it (raster visibility).
-fn mesh_pixels(r: &Renderer) -> Vec<usize> {
+/// Per mesh of `r`'s scene, the pixels of `gbuffer` (its visibility pass) that see it.
+fn mesh_pixels(r: &Renderer, gbuffer: &[Option<hyrt_tracer::Hit>]) -> Vec<usize> {
     let meshes = &r.scene.meshes;
     // Mesh ranges are disjoint but need not cover every triangle, nor come in order.
     let mut mesh_of = vec![u32::MAX; r.scene.positions.len()];
     for (i, m) in meshes.iter().enumerate() {
         mesh_of[m.first as usize..][..m.count as usize].fill(i as u32);
     }
-    let (gbuffer, _) = r.visibility();
     let mut pixels = vec![0; meshes.len()];
     for hit in gbuffer.iter().flatten() {
         if let Some(&m) = mesh_of.get(hit.tri as usize).filter(|&&m| m != u32::MAX) {
             pixels[m as usize] += 1;
         }
     }
-    r.recycle_gbuffer(gbuffer);
     pixels
 }
 
 /// The mesh with the most triangles per pixel that sees it (among meshes seen by at least 1 %
-/// of the pixels, `seen_by` of [`mesh_pixels`]), timed alone: primary rays over its pixels, the
+/// of the pixels of `gbuffer`, `r`'s visibility pass; `seen_by` of [`mesh_pixels`]), timed alone: primary rays over its pixels, the
 /// rasterizer (transform to clip space, setup, depth test; the renderer's options) over its
 /// triangles less an empty frame, and rays over the other pixels; alternated, medians of
 /// `frames`. `None` if no mesh qualifies.
-fn densest_mesh(r: &Renderer, seen_by: &[usize], frames: usize) -> Option<String> {
+fn densest_mesh(
+    r: &Renderer,
+    gbuffer: &[Option<hyrt_tracer::Hit>],
+    seen_by: &[usize],
+    frames: usize,
+) -> Option<String> {
     let scene = r.scene;
     let (w, h) = (scene.settings.width, scene.settings.height);
     let seen = |m: &hyrt::scene::MeshRange, id: u32| id >= m.first && id - m.first < m.count;
@@ -205,10 +211,8 @@ fn densest_mesh(r: &Renderer, seen_by: &[usize], frames: usize) -> Option<String
         .zip(seen_by.iter().copied())
         .filter(|&(_, n)| n >= min_pixels.max(1))
         .max_by(|a, b| (a.0.count as f64 / a.1 as f64).total_cmp(&(b.0.count as f64 / b.1 as f64)))?;
-    let (gbuffer, _) = r.visibility();
     let (mine, other): (Vec<u32>, Vec<u32>) =
         (0..w * h).partition(|&k| gbuffer[k as usize].is_some_and(|hit| seen(mesh, hit.tri)));
-    r.recycle_gbuffer(gbuffer);
 
     // Rows of pixels in image order, as the rays pass traces them.
     let trace = |px: &[u32]| {

@@ -66,6 +66,12 @@ impl Plan {
         plan.add(true, "visibility", vis);
 
         let lights = scene.lights.len();
+        let used = scene.materials_in_use();
+        let highlights = used.iter().filter(|m| m.has_highlight()).count();
+        let highlights = match highlights {
+            0 => "diffuse only".to_string(),
+            n => format!("diffuse, highlights on {n} of {} materials", used.len()),
+        };
         for (l, light) in scene.lights.iter().enumerate() {
             if light.intensity.max_element() <= 0.0 {
                 plan.add(
@@ -93,7 +99,7 @@ impl Plan {
                     plan.add(
                         true,
                         "direct",
-                        format!("{lights} point light(s), rays: one shadow ray per lit hit and light"),
+                        format!("{lights} point light(s), {highlights}, rays: one shadow ray per lit hit and light"),
                     );
                 }
                 Shadows::Maps | Shadows::Smerts => {
@@ -120,27 +126,26 @@ impl Plan {
                     plan.add(
                         true,
                         "direct",
-                        format!("{lights} point light(s), visibility from the occlusion maps"),
+                        format!("{lights} point light(s), {highlights}, visibility from the occlusion maps"),
                     );
                 }
             }
         }
 
-        let used_specular = scene.specular_materials_in_use();
-        if used_specular.is_empty() {
-            plan.add(false, "specular", "no material has a mirror reflectance (Ks > 0)".into());
+        let mirrors: Vec<_> = used.iter().copied().filter(|m| m.is_mirror()).collect();
+        if mirrors.is_empty() {
+            plan.add(false, "specular", "no material in use has a mirror reflectance".into());
         } else if scene.settings.max_depth == 0 {
             plan.add(false, "specular", "max_depth = 0".into());
         } else {
-            // Some scenes give every material a little `Ks`: name a few.
-            let mut names = used_specular.iter().take(4).cloned().collect::<Vec<_>>().join(", ");
-            if used_specular.len() > 4 {
-                names += &format!(" and {} more", used_specular.len() - 4);
-            }
             plan.add(
                 true,
                 "specular",
-                format!("mirror materials [{names}], up to {} bounce(s)", scene.settings.max_depth),
+                format!(
+                    "mirror materials {}, up to {} bounce(s)",
+                    mirror_reasons(&mirrors),
+                    scene.settings.max_depth
+                ),
             );
         }
         let io = &opts.indirect_opts;
@@ -186,6 +191,31 @@ impl Plan {
     pub fn pass_names(&self) -> Vec<&'static str> {
         self.run.iter().map(|d| d.pass).collect()
     }
+}
+
+/// The mirror materials grouped by why they reflect, in material order:
+/// `[mirror (MTL illum 3)]`, `[chrome, polished_brass (scene file override)]`. A group lists at
+/// most four names (a scene may give every material a little reflectance).
+fn mirror_reasons(mirrors: &[&crate::scene::Material]) -> String {
+    let mut groups: Vec<(String, Vec<&str>)> = Vec::new();
+    for m in mirrors {
+        let why = m.mirror_source.to_string();
+        match groups.iter_mut().find(|(w, _)| *w == why) {
+            Some((_, names)) => names.push(&m.name),
+            None => groups.push((why, vec![&m.name])),
+        }
+    }
+    let groups: Vec<String> = groups
+        .into_iter()
+        .map(|(why, names)| {
+            let mut list = names.iter().take(4).copied().collect::<Vec<_>>().join(", ");
+            if names.len() > 4 {
+                list += &format!(" and {} more", names.len() - 4);
+            }
+            format!("{list} ({why})")
+        })
+        .collect();
+    format!("[{}]", groups.join("; "))
 }
 
 impl std::fmt::Display for Plan {

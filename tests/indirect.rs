@@ -37,7 +37,7 @@ fn push_sphere(s: &mut Scene, r: f32, n: u32, m: u32) {
 fn closed_sphere() -> (Scene, f32, f32) {
     let (rho, intensity, radius) = (0.5f32, 2.0f32, 3.0f32);
     let mut s = Scene::new("sphere");
-    let m = s.add_material(Material::diffuse("wall", Vec3::splat(rho)));
+    let m = s.add_material(Material::matte("wall", Vec3::splat(rho)));
     push_sphere(&mut s, radius, 192, m);
     s.lights = vec![PointLight { position: Vec3::ZERO, intensity: Vec3::splat(intensity) }];
     s.camera = Some(Camera::look_at(vec3(0.0, 0.3, 0.5), vec3(1.0, 0.1, -3.0), Vec3::Y, 70.0));
@@ -184,7 +184,7 @@ fn vpl_maps_match_vpl_rays_on_conference() {
 #[test]
 fn light_that_reaches_no_visible_surface_adds_nothing() {
     let mut s = floor_scene(3.0, Vec3::splat(0.5), 4.0, 60.0, vec![], 48, 48);
-    let m = s.add_material(Material::diffuse("box", Vec3::splat(0.8)));
+    let m = s.add_material(Material::matte("box", Vec3::splat(0.8)));
     push_box(&mut s, vec3(-0.5, 0.5, -0.5), vec3(0.5, 1.5, 0.5), m);
     s.lights = vec![PointLight { position: vec3(0.0, 1.0, 0.0), intensity: Vec3::splat(5.0) }];
     s.validate().unwrap();
@@ -245,7 +245,7 @@ fn indirect_is_deterministic_across_thread_counts() {
 #[test]
 fn vpls_near_walls_and_on_the_paraboloid_rim() {
     let mut s = floor_scene(2.0, Vec3::splat(0.6), 3.0, 80.0, vec![], 64, 64);
-    let m = s.add_material(Material::diffuse("wall", Vec3::splat(0.7)));
+    let m = s.add_material(Material::matte("wall", Vec3::splat(0.7)));
     s.push_quad(
         [vec3(-2.0, 0.0, -2.0), vec3(2.0, 0.0, -2.0), vec3(2.0, 2.5, -2.0), vec3(-2.0, 2.5, -2.0)],
         m,
@@ -325,13 +325,13 @@ fn interleaved_sampling_trades_vpl_evaluations_for_filtered_noise() {
 #[test]
 fn vpls_on_thin_slats() {
     let mut s = floor_scene(2.0, Vec3::splat(0.6), 3.0, 70.0, vec![], 64, 64);
-    let m = s.add_material(Material::diffuse("slat", Vec3::splat(0.8)));
+    let m = s.add_material(Material::matte("slat", Vec3::splat(0.8)));
     for i in 0..20 {
         let z = -1.0 + 0.1 * i as f32;
         push_box(&mut s, vec3(-1.0, 1.2, z), vec3(1.0, 1.201, z + 0.08), m);
     }
     // A wall behind the slats: the slats' VPLs light it past their neighbours.
-    let wall = s.add_material(Material::diffuse("wall", Vec3::splat(0.7)));
+    let wall = s.add_material(Material::matte("wall", Vec3::splat(0.7)));
     s.push_quad(
         [vec3(-2.0, 0.0, -1.2), vec3(2.0, 0.0, -1.2), vec3(2.0, 2.5, -1.2), vec3(-2.0, 2.5, -1.2)],
         wall,

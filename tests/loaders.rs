@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use hyrt::scene::{self, MeshData, Scene, file, gltf, obj};
+use hyrt::scene::{self, MeshData, MirrorSource, Scene, file, gltf, material, obj};
 
 /// A model under `../shared/scenes/` (relative to the crate root).
 fn shared(rel: &str) -> PathBuf {
@@ -85,8 +85,11 @@ fn obj_cornell_bunny_mirror() {
     let m = obj::load(&shared("cornell-bunny-mirror/cornell-bunny-mirror.obj")).unwrap();
     assert_eq!(check_mesh(&m), 69_465);
     let mirror = m.materials.iter().find(|m| m.name == "mirror").expect("material 'mirror'");
-    assert_eq!(mirror.ks, Vec3::ONE);
-    assert_eq!(mirror.kd, Vec3::ZERO);
+    // `illum 3`: Ks is the mirror reflectance, no highlight; `Kd 0`: a perfect mirror.
+    assert_eq!((mirror.diffuse, mirror.highlight, mirror.mirror), (Vec3::ZERO, Vec3::ZERO, Vec3::ONE));
+    assert_eq!(mirror.mirror_source, MirrorSource::Mtl { illum: 3 });
+    // Every other material is `illum 2` with `Ks 0`: diffuse only.
+    assert!(m.materials.iter().filter(|m| m.name != "mirror").all(|m| !m.is_mirror() && !m.has_highlight()));
     assert!(m.material.iter().any(|&i| m.materials[i as usize].name == "mirror"));
 }
 
@@ -103,9 +106,12 @@ fn obj_conference() {
     assert_eq!(check_mesh(&m), 331_179);
     // The conference room has no vertex normals.
     assert!(m.normals.iter().all(Option::is_none));
-    // 35 materials: 28 with Ks 0.2 and 7 with Ks 0.43-0.71.
+    // 35 materials, all `illum 2` with `Ns 40`: 28 with Ks 0.2 and 7 with Ks 0.43-0.71, read as
+    // highlights; none reflects.
     assert_eq!(m.materials.len(), 35);
-    assert_eq!(m.materials.iter().filter(|m| m.ks.max_element() > 0.4).count(), 7);
+    assert!(m.materials.iter().all(|m| !m.is_mirror() && (m.shininess - 40.0).abs() < 1e-4));
+    assert_eq!(m.materials.iter().filter(|m| m.highlight.max_element() > 0.4).count(), 7);
+    assert_eq!(m.materials.iter().filter(|m| m.highlight == Vec3::splat(0.2)).count(), 28);
 }
 
 #[test]
@@ -169,20 +175,66 @@ fn obj_small_fixture() {
     assert_eq!(names, ["poly", "quad", "tri", "unknown"]);
     let mat = |t: usize| &m.materials[m.material[t] as usize];
     assert_eq!(mat(3).name, "red");
-    assert_eq!(mat(3).kd, Vec3::new(0.8, 0.1, 0.1));
-    // `Kd 0.5` means grey; Ks 0.5 without illum 3 is a partial mirror.
+    assert_eq!(mat(3).diffuse, Vec3::new(0.8, 0.1, 0.1));
+    // `Kd 0.5` means grey; Ks 0.5 without `illum` (nor `Ns`) is a highlight of the default
+    // exponent, not a mirror.
     assert_eq!(mat(5).name, "shiny");
-    assert_eq!(mat(5).kd, Vec3::splat(0.5));
-    assert_eq!(mat(5).ks, Vec3::splat(0.5));
+    assert_eq!(mat(5).diffuse, Vec3::splat(0.5));
+    assert_eq!((mat(5).highlight, mat(5).shininess), (Vec3::splat(0.5), material::DEFAULT_SHININESS));
+    assert!(!mat(5).is_mirror());
     // Faces without a (known) material share one grey default.
     assert_eq!(mat(0).name, "default");
     assert_eq!(mat(6).name, "default");
     assert_eq!(m.materials.iter().filter(|m| m.name == "default").count(), 1);
-    assert_eq!(mat(0).kd, Vec3::splat(0.8));
+    assert_eq!(mat(0).diffuse, Vec3::splat(0.8));
     // Normals only where the file gave them.
     assert_eq!(m.normals[3], Some([Vec3::Z; 3]));
     assert_eq!(m.normals[0], None);
     assert_eq!(m.normals[5], None);
+}
+
+/// Each MTL illumination model as the format means it: 0-2 and none without a reflection ray
+/// (a highlight from 2, or without `illum`); 3 and up a mirror of reflectance `Ks`, no highlight.
+#[test]
+fn obj_illumination_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut mtl = String::new();
+    let mut obj = String::from("mtllib illum.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    let models: Vec<Option<u8>> = [None].into_iter().chain((0..=10).map(Some)).collect();
+    for (k, illum) in models.iter().enumerate() {
+        mtl += &format!("newmtl m{k}\nKd 0.3 0.4 0.5\nKs 0.2 0.1 0.05\nNs 64\n");
+        if let Some(i) = illum {
+            mtl += &format!("illum {i}\n");
+        }
+        obj += &format!("usemtl m{k}\nf 1 2 3\n");
+    }
+    write(dir.path(), "illum.mtl", &mtl);
+    let m = obj::load(&write(dir.path(), "illum.obj", &obj)).unwrap();
+    let (kd, ks) = (Vec3::new(0.3, 0.4, 0.5), Vec3::new(0.2, 0.1, 0.05));
+    for (k, illum) in models.iter().enumerate() {
+        let mat = &m.materials[m.material[k] as usize];
+        assert_eq!((mat.name.as_str(), mat.diffuse, mat.shininess), (format!("m{k}").as_str(), kd, 64.0));
+        let (highlight, mirror) = match illum {
+            None | Some(2) => (ks, Vec3::ZERO),
+            Some(0 | 1) => (Vec3::ZERO, Vec3::ZERO),
+            Some(_) => (Vec3::ZERO, ks),
+        };
+        assert_eq!((mat.highlight, mat.mirror), (highlight, mirror), "illum {illum:?}");
+        if let Some(i @ 3..) = *illum {
+            assert_eq!(mat.mirror_source, MirrorSource::Mtl { illum: i });
+        }
+    }
+    // `Ks 1` alone (the old rule's perfect mirror) is a highlight under `illum 2`.
+    write(dir.path(), "one.mtl", "newmtl shiny\nKd 0\nKs 1 1 1\nillum 2\n");
+    let m = obj::load(&write(
+        dir.path(),
+        "one.obj",
+        "mtllib one.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl shiny\nf 1 2 3\n",
+    ))
+    .unwrap();
+    let shiny = &m.materials[0];
+    assert_eq!((shiny.diffuse, shiny.highlight, shiny.mirror), (Vec3::ZERO, Vec3::ONE, Vec3::ZERO));
+    assert!(shiny.is_lit() && !shiny.is_mirror());
 }
 
 #[test]
@@ -267,6 +319,10 @@ fn obj_malformed_mtl() {
         ("newmtl a\nKs nan 0 0\n", "bad.mtl:2: colour has a NaN or infinite component"),
         ("newmtl a\n\nillum three\n", "bad.mtl:3: malformed illumination model"),
         ("newmtl a\nNs\n", "bad.mtl:2: malformed number in 'Ns'"),
+        ("newmtl a\nNs -1\n", "bad.mtl:2: the highlight exponent must be finite and >= 0 in 'Ns -1'"),
+        ("newmtl a\n\nNs inf\n", "bad.mtl:3: the highlight exponent must be finite and >= 0"),
+        ("newmtl a\nKd 0.5 -0.1 0.2\n", "bad.mtl:2: negative reflectance in 'Kd 0.5 -0.1 0.2'"),
+        ("newmtl a\nKs -1\n", "bad.mtl:2: negative reflectance"),
         ("newmtl\n", "bad.mtl:1: 'newmtl' without a material name"),
     ];
     for (mtl, expected) in cases {
@@ -284,7 +340,7 @@ fn obj_mtllib_with_several_files() {
     let p =
         write(dir.path(), "two.obj", "mtllib a.mtl b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl b\nf 1 2 3\n");
     let m = obj::load(&p).unwrap();
-    assert_eq!(m.materials[m.material[0] as usize].kd, Vec3::Y);
+    assert_eq!(m.materials[m.material[0] as usize].diffuse, Vec3::Y);
 }
 
 #[test]
@@ -437,11 +493,69 @@ fn gltf_data_uri_and_mirrored_node() {
     let m = gltf::load(&p).unwrap();
     assert_eq!(check_mesh(&m), 2);
     assert_eq!(m.ranges[1].name, "mirrored");
-    assert_eq!(m.materials[m.material[0] as usize].kd, Vec3::new(1.0, 0.5, 0.0));
+    // Only a base colour: glTF's default metallic and roughness (both 1) make a rough metal,
+    // whose highlight of exponent 0 is a Lambertian lobe of the base colour.
+    let orange = &m.materials[m.material[0] as usize];
+    assert_eq!(
+        (orange.diffuse, orange.highlight, orange.shininess),
+        (Vec3::ZERO, Vec3::new(1.0, 0.5, 0.0), 0.0)
+    );
     // The mirrored copy is re-wound: both still face +Z.
     assert!(geometric_normal(&m.positions[0]).z > 0.99);
     assert!(geometric_normal(&m.positions[1]).z > 0.99);
     assert!(m.positions[1].iter().all(|p| p.x >= 4.0 - 1e-6 && p.x <= 5.0 + 1e-6));
+}
+
+/// The documented glTF mapping: diffuse `c (1 - m)`, `F0 = 0.04 (1 - m) + c m`; smooth metals
+/// reflect, everything else has a highlight whose exponent comes from the roughness.
+#[test]
+fn gltf_metallic_roughness_mapping() {
+    let dir = tempfile::tempdir().unwrap();
+    let materials = r#"[
+      {"name": "plastic", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.5}},
+      {"name": "chrome", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.8, 0.7, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.1}},
+      {"name": "brushed", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.8, 0.7, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3}},
+      {"name": "half", "pbrMetallicRoughness": {"metallicFactor": 0.5, "roughnessFactor": 0.0}},
+      {"name": "glass-smooth", "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.0}}
+    ]"#;
+    let text = tiny_gltf(r#"[{"mesh": 0}, {"mesh": 0}]"#, 4)
+        .replace(r#""material": 0"#, r#""material": 1"#)
+        .replace(
+            r#"[{"name": "orange", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.5, 0.0, 1.0]}}]"#,
+            materials,
+        );
+    let m = gltf::load(&write(dir.path(), "mats.gltf", &text)).unwrap();
+    let by = |n: &str| m.materials.iter().find(|m| m.name == n).unwrap_or_else(|| panic!("{n}")).clone();
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-3 * b.abs().max(1.0);
+
+    let p = by("plastic");
+    assert_eq!(
+        (p.diffuse, p.highlight, p.mirror),
+        (Vec3::new(0.5, 0.25, 1.0), Vec3::splat(0.04), Vec3::ZERO)
+    );
+    // r = 0.5: alpha = 0.25, Ns = 2 / 0.0625 - 2 = 30.
+    assert!(close(p.shininess, 30.0), "{}", p.shininess);
+
+    let c = by("chrome");
+    assert_eq!((c.diffuse, c.highlight, c.mirror), (Vec3::ZERO, Vec3::ZERO, Vec3::new(0.9, 0.8, 0.7)));
+    assert_eq!(c.mirror_source, MirrorSource::Gltf { metallic: 1.0, roughness: 0.1 });
+
+    let b = by("brushed");
+    assert_eq!((b.diffuse, b.highlight, b.mirror), (Vec3::ZERO, Vec3::new(0.9, 0.8, 0.7), Vec3::ZERO));
+    // r = 0.3: alpha = 0.09, Ns = 2 / 0.0081 - 2.
+    assert!(close(b.shininess, 2.0 / 0.0081 - 2.0), "{}", b.shininess);
+
+    // Default base colour 1: metallic 0.5 and roughness 0 is a smooth metal, F0 = 0.52.
+    let h = by("half");
+    assert_eq!(h.diffuse, Vec3::splat(0.5));
+    assert!(h.mirror.to_array().iter().all(|&k| close(k, 0.52)), "{}", h.mirror);
+
+    // A smooth dielectric never reflects: its highlight's exponent is capped.
+    let g = by("glass-smooth");
+    assert_eq!(
+        (g.diffuse, g.highlight, g.shininess, g.mirror),
+        (Vec3::ONE, Vec3::splat(0.04), material::MAX_SHININESS, Vec3::ZERO)
+    );
 }
 
 #[test]
@@ -515,7 +629,7 @@ fn toml_cornell_bunny_mirror_fixture() {
     assert_eq!(cam.fov_y_deg, 19.5);
     assert_eq!(cam.fov_x_deg, None);
     let mirror = s.materials.iter().find(|m| m.name == "mirror").unwrap();
-    assert_eq!((mirror.kd, mirror.ks), (Vec3::ZERO, Vec3::ONE));
+    assert_eq!((mirror.diffuse, mirror.mirror), (Vec3::ZERO, Vec3::ONE));
     assert_eq!(s.source.as_deref(), Some(data("cornell-bunny-mirror.toml").as_path()));
     s.validate().unwrap();
     // The CLI entry point accepts the same file (and validates it).
@@ -545,7 +659,11 @@ fn toml_office_fixture_direction_and_exclusion() {
 /// A scene directory with a one-triangle OBJ `tri.obj` (0,0,0) (1,0,0) (0,1,0), material `m`.
 fn tri_dir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "tri.mtl", "newmtl m\nKd 0.5 0.5 0.5\nnewmtl other\nKd 1 1 1\n");
+    write(
+        dir.path(),
+        "tri.mtl",
+        "newmtl m\nKd 0.5 0.5 0.5\nKs 0.25\nNs 20\nillum 2\nnewmtl other\nKd 1 1 1\n",
+    );
     write(dir.path(), "tri.obj", "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
     dir
 }
@@ -679,19 +797,76 @@ fn toml_material_override_without_match() {
     let p = write(
         dir.path(),
         "bad.toml",
-        &format!("{CAMERA}[[mesh]]\npath = \"tri.obj\"\n\n[[material]]\nname = \"mirorr\"\nks = [1, 1, 1]\n"),
+        &format!(
+            "{CAMERA}[[mesh]]\npath = \"tri.obj\"\n\n[[material]]\nname = \"mirorr\"\nmirror = [1, 1, 1]\n"
+        ),
     );
     assert_contains(&err_text(file::load(&p)), &["bad.toml:8", "'mirorr' matches no material", "'m'"]);
+}
 
-    // A matching override sets exactly what it gives.
-    let p = write(
-        dir.path(),
-        "ok.toml",
-        &format!("{CAMERA}[[mesh]]\npath = \"tri.obj\"\n[[material]]\nname = \"m\"\nks = [1, 1, 1]\n"),
+/// Each part of a material can be overridden on its own; what is not given stays as the MTL
+/// read it; a mirror set by the file names the file as its reason.
+#[test]
+fn toml_material_overrides_each_part() {
+    let dir = tri_dir();
+    let load = |body: &str| {
+        let p = write(
+            dir.path(),
+            "ok.toml",
+            &format!("{CAMERA}[[mesh]]\npath = \"tri.obj\"\n[[material]]\nname = \"m\"\n{body}"),
+        );
+        let s = file::load(&p).unwrap_or_else(|e| panic!("{body}: {e:#}"));
+        s.materials[s.material[0] as usize].clone()
+    };
+    // As the MTL says: `Kd 0.5`, `Ks 0.25`, `Ns 20`, `illum 2`.
+    let mtl = load("");
+    assert_eq!(
+        (mtl.diffuse, mtl.highlight, mtl.shininess, mtl.mirror),
+        (Vec3::splat(0.5), Vec3::splat(0.25), 20.0, Vec3::ZERO)
     );
-    let s = file::load(&p).unwrap();
-    let m = &s.materials[s.material[0] as usize];
-    assert_eq!((m.kd, m.ks), (Vec3::splat(0.5), Vec3::ONE));
+    let m = load("diffuse = [0.1, 0.2, 0.3]\n");
+    assert_eq!(m, hyrt::scene::Material { diffuse: Vec3::new(0.1, 0.2, 0.3), ..mtl.clone() });
+    let m = load("highlight = 0.5\n");
+    assert_eq!(m, hyrt::scene::Material { highlight: Vec3::splat(0.5), ..mtl.clone() });
+    let m = load("shininess = 300\n");
+    assert_eq!(m, hyrt::scene::Material { shininess: 300.0, ..mtl.clone() });
+    let m = load("mirror = [1, 0.5, 0.25]\nhighlight = 0\n");
+    assert_eq!(
+        m,
+        hyrt::scene::Material {
+            mirror: Vec3::new(1.0, 0.5, 0.25),
+            highlight: Vec3::ZERO,
+            mirror_source: MirrorSource::SceneFile,
+            ..mtl.clone()
+        }
+    );
+}
+
+/// Unknown keys (among them `kd` and `ks`, which once meant diffuse and mirror) and
+/// out-of-range numbers are errors that name the file and line.
+#[test]
+fn toml_material_override_errors() {
+    let dir = tri_dir();
+    let cases = [
+        (
+            "ks = [1, 1, 1]\n",
+            "unknown field `ks`, expected one of `name`, `diffuse`, `highlight`, `shininess`, `mirror`",
+        ),
+        ("kd = 0.5\n", "unknown field `kd`"),
+        ("mirror = -0.5\n", "mirror colour [-0.5, -0.5, -0.5] must be finite and >= 0"),
+        ("diffuse = [0.5, nan, 0.5]\n", "diffuse colour"),
+        ("shininess = -1\n", "highlight exponent -1 must be finite and >= 0"),
+        ("shininess = inf\n", "highlight exponent inf must be finite and >= 0"),
+        ("highlight = [1, 2]\n", "invalid length 2, expected an array of three numbers"),
+    ];
+    for (body, expected) in cases {
+        let p = write(
+            dir.path(),
+            "bad.toml",
+            &format!("{CAMERA}[[mesh]]\npath = \"tri.obj\"\n[[material]]\nname = \"m\"\n{body}"),
+        );
+        assert_contains(&err_text(file::load(&p)), &["bad.toml:", expected]);
+    }
 }
 
 #[test]

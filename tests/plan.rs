@@ -34,7 +34,7 @@ fn reflections_only_with_mirrors() {
     let with = cornell(64, 48);
     let mut without = with.clone();
     for m in &mut without.materials {
-        m.ks = Vec3::ZERO;
+        m.mirror = Vec3::ZERO;
     }
     let mut depth0 = with.clone();
     depth0.settings.max_depth = 0;

@@ -47,6 +47,64 @@ fn single_square_radiance_matches_the_formula() {
     assert!(checked >= 60, "too few pixels on the square: {checked}");
 }
 
+/// The highlight: a glossy square, a point light and a camera on opposite sides, placed so
+/// that the mirror direction of the light at the square's centre goes to the camera. Every
+/// pixel's radiance equals `I cos / r^2 * (Kd / pi + Ks (n + 8) / (8 pi) (n . h)^n)` computed
+/// independently in f64; the centre pixel, where `n . h = 1`, is its closed form
+/// `I / (2 sqrt 2) * (Kd / pi + Ks (n + 8) / (8 pi))`. Reference and hybrid alike.
+#[test]
+fn highlight_radiance_matches_the_formula() {
+    let (kd, ks, ns) = (vec3(0.5, 0.4, 0.3), vec3(0.3, 0.2, 0.1), 50.0f32);
+    let light = PointLight { position: vec3(1.0, 1.0, 0.0), intensity: vec3(2.0, 1.0, 0.5) };
+    // Odd size: the centre pixel's ray goes through the target.
+    let (w, h) = (33u32, 33u32);
+    let mut scene = floor_scene(1.0, kd, 3.0, 40.0, vec![light], w, h);
+    scene.materials[0] = Material::glossy("gloss", kd, ks, ns);
+    scene.camera = Some(hyrt::scene::Camera::look_at(vec3(-1.0, 1.0, 0.0), Vec3::ZERO, Vec3::Y, 30.0));
+    scene.validate().unwrap();
+    let cam = CameraRays::new(&scene.camera.unwrap(), w, h);
+    let brdf = |n_h: f64, cos: f64| {
+        let n = f64::from(ns);
+        (kd.as_dvec3() / PI + ks.as_dvec3() * (n + 8.0) / (8.0 * PI) * n_h.max(0.0).powf(n)) * cos
+    };
+    for opts in [Options::reference(), Options::hybrid()] {
+        let frame = render(&scene, opts);
+        let centre = frame.film.get(w / 2, h / 2).as_dvec3();
+        let closed = light.intensity.as_dvec3() / (2.0 * 2f64.sqrt())
+            * (kd.as_dvec3() / PI + ks.as_dvec3() * (f64::from(ns) + 8.0) / (8.0 * PI));
+        let rel = ((centre - closed).abs() / closed).max_element();
+        assert!(rel <= 1e-4, "{opts:?}: centre {centre}, closed form {closed}, relative error {rel:e}");
+        let mut checked = 0;
+        for y in 0..h {
+            for x in 0..w {
+                let sx = (2.0 * (x as f64 + 0.5) / w as f64 - 1.0) * cam.tan_x as f64;
+                let sy = (1.0 - 2.0 * (y as f64 + 0.5) / h as f64) * cam.tan_y as f64;
+                let d = cam.forward.as_dvec3() + cam.right.as_dvec3() * sx + cam.up.as_dvec3() * sy;
+                let eye = cam.eye.as_dvec3();
+                let p = eye + d * (-eye.y / d.y);
+                if d.y >= 0.0 || p.x.abs() > 0.99 || p.z.abs() > 0.99 {
+                    continue;
+                }
+                let l = light.position.as_dvec3() - p;
+                let (wi, wo) = (l.normalize(), (eye - p).normalize());
+                let n_h = (wi + wo).normalize().y;
+                let expected = light.intensity.as_dvec3() / l.length_squared() * brdf(n_h, wi.y);
+                let got = frame.film.get(x, y).as_dvec3();
+                let rel = ((got - expected).abs() / expected).max_element();
+                assert!(
+                    rel <= 1e-4,
+                    "{opts:?} pixel ({x},{y}): got {got}, expected {expected}, error {rel:e}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked >= 500, "too few pixels on the square: {checked}");
+        // Not a vanishing term: at the centre the highlight is over 4x the diffuse light.
+        let diffuse_only = f64::from(light.intensity.x) / (2.0 * 2f64.sqrt()) * f64::from(kd.x) / PI;
+        assert!(centre.x > 5.0 * diffuse_only, "{centre} against diffuse {diffuse_only}");
+    }
+}
+
 /// Primary rays = width x height; shadow rays = (hits facing the lights) x lights, where the
 /// hits are counted by hand: the pixel centres whose rays fall inside the square.
 #[test]
@@ -88,7 +146,7 @@ fn specular_rays_are_cast_only_when_a_mirror_is_seen() {
     assert_eq!(r.stats.rays.specular, 0);
     assert!(!r.stats.time_ms.contains_key("specular"), "no mirror: no specular pass");
 
-    scene.materials[0] = Material { name: "mirror".into(), kd: Vec3::ZERO, ks: Vec3::ONE };
+    scene.materials[0] = Material::mirror("mirror", Vec3::ZERO, Vec3::ONE);
     let r = render(&scene, Options::default());
     // Every pixel sees the mirror; each reflection goes up and escapes: one ray per pixel.
     assert_eq!(r.stats.rays.specular, 16 * 16);

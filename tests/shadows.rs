@@ -81,7 +81,7 @@ fn grazing_floor_has_no_acne() {
             Camera::look_at(vec3(0.0, 6.0, 6.0), vec3(0.0, 0.0, -2.0), Vec3::Y, 60.0),
             (160, 120),
         );
-        let m = s.add_material(Material::diffuse("floor", Vec3::splat(0.7)));
+        let m = s.add_material(Material::matte("floor", Vec3::splat(0.7)));
         push_floor(&mut s, 10.0, 40, m);
         for kind in [MapKind::Cube, MapKind::Paraboloid] {
             let (_, f) = against_reference(&s, with(Shadows::Maps, kind));
@@ -102,7 +102,7 @@ fn object_on_floor_does_not_leak_light() {
         Camera::look_at(vec3(-3.0, 3.0, 4.0), vec3(0.3, 0.3, 0.0), Vec3::Y, 50.0),
         (200, 150),
     );
-    let m = s.add_material(Material::diffuse("grey", Vec3::splat(0.6)));
+    let m = s.add_material(Material::matte("grey", Vec3::splat(0.6)));
     push_floor(&mut s, 4.0, 8, m);
     push_box(&mut s, vec3(-0.5, 0.0, -0.5), vec3(0.5, 1.0, 0.5), m);
     for kind in [MapKind::Cube, MapKind::Paraboloid] {
@@ -128,7 +128,7 @@ fn occluders_across_cube_edges_and_the_paraboloid_seam() {
         Camera::look_at(vec3(-4.0, -3.5, -4.0), vec3(2.0, 1.5, 1.0), Vec3::Y, 90.0),
         (240, 180),
     );
-    let m = s.add_material(Material::diffuse("wall", Vec3::splat(0.8)));
+    let m = s.add_material(Material::matte("wall", Vec3::splat(0.8)));
     // Room: the inside of a box of half-size 5 (its faces seen from inside).
     push_box(&mut s, Vec3::splat(-5.0), Vec3::splat(5.0), m);
     // Across the cube edge x = y (z = 0 also the seam), a corner (1, 1, 1), and the seam z = 0.
@@ -156,7 +156,7 @@ fn light_very_close_to_a_wall() {
         Camera::look_at(vec3(0.3, 0.2, 3.0), Vec3::ZERO, Vec3::Y, 60.0),
         (160, 120),
     );
-    let m = s.add_material(Material::diffuse("wall", Vec3::splat(0.8)));
+    let m = s.add_material(Material::matte("wall", Vec3::splat(0.8)));
     s.push_quad([vec3(-2.0, -2.0, 0.0), vec3(2.0, -2.0, 0.0), vec3(2.0, 2.0, 0.0), vec3(-2.0, 2.0, 0.0)], m);
     push_box(&mut s, vec3(0.1, -0.05, 0.0004), vec3(0.2, 0.05, 0.0006), m);
     for kind in [MapKind::Cube, MapKind::Paraboloid] {
@@ -179,7 +179,7 @@ fn light_inside_a_closed_box() {
         Camera::look_at(vec3(-3.0, 3.0, 4.0), vec3(0.0, 0.3, 0.0), Vec3::Y, 60.0),
         (160, 120),
     );
-    let m = s.add_material(Material::diffuse("grey", Vec3::splat(0.6)));
+    let m = s.add_material(Material::matte("grey", Vec3::splat(0.6)));
     push_floor(&mut s, 4.0, 4, m);
     push_box(&mut s, vec3(-0.5, 0.01, -0.5), vec3(0.5, 1.0, 0.5), m);
     for kind in [MapKind::Cube, MapKind::Paraboloid] {
@@ -201,7 +201,7 @@ fn degenerate_triangles_in_the_maps() {
         Camera::look_at(vec3(-3.0, 3.0, 4.0), vec3(0.0, 0.3, 0.0), Vec3::Y, 50.0),
         (160, 120),
     );
-    let m = s.add_material(Material::diffuse("grey", Vec3::splat(0.6)));
+    let m = s.add_material(Material::matte("grey", Vec3::splat(0.6)));
     push_floor(&mut s, 3.0, 6, m);
     push_box(&mut s, vec3(-0.4, 0.0, -0.4), vec3(0.4, 0.8, 0.4), m);
     let p = vec3(0.0, 1.5, 0.0);

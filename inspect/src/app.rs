@@ -515,8 +515,21 @@ impl Inspector {
             }
             Some(h) => {
                 ui.label(format!("triangle {}", h.tri));
-                ui.label(format!("material {}", h.material));
-                ui.label(format!("  Kd {}  Ks {}", vec3(h.kd), vec3(h.ks)));
+                let m = &h.material;
+                ui.label(format!("material {}", m.name));
+                if m.has_highlight() {
+                    ui.label(format!(
+                        "  Kd {}  Ks {}  Ns {}",
+                        vec3(m.diffuse),
+                        vec3(m.highlight),
+                        m.shininess
+                    ));
+                } else {
+                    ui.label(format!("  Kd {}", vec3(m.diffuse)));
+                }
+                if m.is_mirror() {
+                    ui.label(format!("  Kr {} ({})", vec3(m.mirror), m.mirror_source));
+                }
                 ui.label(format!("  t {:.4}  at {}", h.t, vec3(h.p)));
             }
         }

@@ -36,9 +36,7 @@ pub struct HitInfo {
     pub t: f32,
     pub bary: [f32; 3],
     pub p: Vec3,
-    pub material: String,
-    pub kd: Vec3,
-    pub ks: Vec3,
+    pub material: hyrt::scene::Material,
 }
 
 /// One light at the picked pixel.
@@ -88,7 +86,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
     let surf = hit.map(|h| SurfaceHit::new(scene, &h, loaded.camera.direction(x, y).normalize()));
     let hit_info = hit.zip(surf).map(|(h, s)| {
         let m = &scene.materials[scene.material[h.tri as usize] as usize];
-        HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.name.clone(), kd: m.kd, ks: m.ks }
+        HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.clone() }
     });
     let bufs = r.frame.shadows.as_ref();
     let by_rays = r.options.shadows == Shadows::Rays;
@@ -98,7 +96,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
         .enumerate()
         .map(|(l, light)| {
             let needed = surf.is_some_and(|s| {
-                scene.materials[scene.material[s.tri as usize] as usize].kd != Vec3::ZERO
+                scene.materials[scene.material[s.tri as usize] as usize].is_lit()
                     && facing(&s, light).is_some()
             });
             let map = r.maps.get(l).cloned().flatten().zip(surf).filter(|_| needed).map(|(m, s)| {

@@ -46,13 +46,16 @@ fn shadow_ray(s: &SurfaceHit, light: &Vec3, r: &Renderer, c: &mut RayCounts) -> 
     !r.tracer.occluded(&ray, RayKind::Shadow, c)
 }
 
-/// Diffuse direct light at `hit`: `L = Kd / pi * sum_lights I * cos(theta) / r^2` over the
-/// lights that are in front of the surface and visible, `visible(l, light, hit, counts)`
-/// deciding visibility.
+/// Direct light at `hit`: `L = sum_lights I / r^2 * cos(theta) * (Kd / pi + Ks * lobe)` over
+/// the lights that are in front of the surface and visible, `visible(l, light, hit, counts)`
+/// deciding visibility; `lobe` is the material's highlight ([`Material::highlight_lobe`],
+/// whose module derives the model).
 ///
 /// Visibility is not asked for a light behind the surface (by the shading or the geometric
 /// normal: a ray leaving through the back would only find the surface itself), nor on a
-/// surface without diffuse reflectance (a perfect mirror).
+/// surface that point lights do not light (a perfect mirror: no diffuse term, no highlight).
+///
+/// [`Material::highlight_lobe`]: crate::scene::Material::highlight_lobe
 pub fn shade(
     r: &Renderer,
     hit: &SurfaceHit,
@@ -60,17 +63,24 @@ pub fn shade(
     mut visible: impl FnMut(usize, &crate::scene::PointLight, &SurfaceHit, &mut RayCounts) -> bool,
 ) -> Vec3 {
     let m = &r.scene.materials[r.scene.material[hit.tri as usize] as usize];
-    if m.kd == Vec3::ZERO {
+    if !m.is_lit() {
         return Vec3::ZERO;
     }
-    let mut sum = Vec3::ZERO;
+    let highlight = m.has_highlight();
+    // Irradiance at normal incidence times cos(theta), summed; and weighted by the lobe.
+    let (mut sum, mut lobe_sum) = (Vec3::ZERO, Vec3::ZERO);
     for (l, light) in r.scene.lights.iter().enumerate() {
-        let Some((_, cos, d2)) = facing(hit, light) else { continue };
+        let Some((wi, cos, d2)) = facing(hit, light) else { continue };
         if visible(l, light, hit, counts) {
-            sum += light.intensity * (cos / d2);
+            let e = light.intensity * (cos / d2);
+            sum += e;
+            if highlight {
+                lobe_sum += e * m.highlight_lobe(hit.ns, wi, hit.wo);
+            }
         }
     }
-    m.kd * FRAC_1_PI * sum
+    let diffuse = m.diffuse * FRAC_1_PI * sum;
+    if highlight { diffuse + m.highlight * lobe_sum } else { diffuse }
 }
 
 /// [`shade`] at a point with no screen neighbours (a mirror hit): shadow rays, or the maps'

@@ -212,7 +212,7 @@ impl Vpls<'_> {
         stride: usize,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let kd = r.scene.materials[r.scene.material[s.tri as usize] as usize].kd;
+        let kd = r.scene.materials[r.scene.material[s.tri as usize] as usize].diffuse;
         if kd == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -280,7 +280,7 @@ pub fn run(
         .into_par_iter()
         .map(|i| {
             let h = gbuffer[i].as_ref()?;
-            let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].kd;
+            let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
             let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
             (kd != Vec3::ZERO).then(|| (SurfaceHit::new(r.scene, h, dir), kd))
         })

@@ -140,10 +140,11 @@ pub struct Shadowing<'r> {
 }
 
 impl Renderer<'_> {
-    /// Whether direct light is computed at `s` at all: not on surfaces without a diffuse
-    /// reflectance (perfect mirrors), where the reference casts no shadow ray either.
+    /// Whether direct light is computed at `s` at all: not on surfaces that point lights do
+    /// not light (perfect mirrors: no diffuse term, no highlight), where the reference casts no
+    /// shadow ray either.
     pub(crate) fn needs_light(&self, tri: u32) -> bool {
-        self.scene.materials[self.scene.material[tri as usize] as usize].kd != Vec3::ZERO
+        self.scene.materials[self.scene.material[tri as usize] as usize].is_lit()
     }
 
     fn planes(&self) -> &[Vec4] {

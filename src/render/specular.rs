@@ -29,14 +29,14 @@ pub fn run(
     let (w, h) = (r.scene.settings.width as usize, r.scene.settings.height as usize);
     // Under interleaved VPL sampling, a pixel's mirror path sees its pixel's VPL subset.
     let k = r.options.indirect_opts.interleave as usize;
-    let ks_of = |tri: u32| r.scene.materials[r.scene.material[tri as usize] as usize].ks;
+    let kr_of = |tri: u32| r.scene.materials[r.scene.material[tri as usize] as usize].mirror;
     // Only hits on mirror materials start a path: skip the others before building their
     // shading point.
     let mut paths: Vec<Path> = gbuffer
         .par_iter()
         .enumerate()
         .filter_map(|(i, hit)| {
-            let hit = hit.as_ref().filter(|h| ks_of(h.tri) != Vec3::ZERO)?;
+            let hit = hit.as_ref().filter(|h| kr_of(h.tri) != Vec3::ZERO)?;
             let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
             let hit = SurfaceHit::new(r.scene, hit, dir);
             Some(Path { pixel: i as u32, hit, weight: Vec3::ONE, sum: Vec3::ZERO, key: 0 })
@@ -57,7 +57,7 @@ pub fn run(
                 let mut ended = Vec::new();
                 for p in chunk.iter_mut() {
                     let before = c;
-                    let next = bounce(r, &p.hit, &mut p.weight, ks_of(p.hit.tri), &mut c);
+                    let next = bounce(r, &p.hit, &mut p.weight, kr_of(p.hit.tri), &mut c);
                     r.pixel_rays.add(p.pixel as usize, &before, &c);
                     match next {
                         Some(hit) => {
@@ -117,7 +117,7 @@ pub fn run(
     total
 }
 
-/// A mirror path in flight: its pixel, the surface it last met, the product of `Ks` so far and
+/// A mirror path in flight: its pixel, the surface it last met, the product of `Kr` so far and
 /// the light gathered; `key` orders the paths spatially.
 #[derive(Clone, Copy)]
 struct Path {
@@ -128,19 +128,19 @@ struct Path {
     key: u64,
 }
 
-/// One mirror bounce from `hit` (reflectance `ks`): the next surface, with `weight` multiplied
-/// by `ks`; `None` when `hit` is no mirror or the reflection leaves the scene.
+/// One mirror bounce from `hit` (reflectance `kr`): the next surface, with `weight` multiplied
+/// by `kr`; `None` when `hit` is no mirror or the reflection leaves the scene.
 fn bounce(
     r: &Renderer,
     hit: &SurfaceHit,
     weight: &mut Vec3,
-    ks: Vec3,
+    kr: Vec3,
     counts: &mut RayCounts,
 ) -> Option<SurfaceHit> {
-    if ks == Vec3::ZERO {
+    if kr == Vec3::ZERO {
         return None;
     }
-    *weight *= ks;
+    *weight *= kr;
     // Reflect about the shading normal; fall back to the geometric one if that would send the
     // ray into the surface.
     let mut dir = reflect(-hit.wo, hit.ns);
@@ -172,7 +172,7 @@ fn morton(p: Vec3, lo: Vec3, hi: Vec3) -> u64 {
 /// Light arriving at `hit` by mirror reflection, followed for up to `max_depth` bounces, one
 /// pixel's path on its own: what [`run`] computes for all of them at once (the test below holds
 /// the two to the same bits);
-/// each reflection is weighted by the product of `Ks` so far, and each surface it meets is
+/// each reflection is weighted by the product of `Kr` so far, and each surface it meets is
 /// shaded with direct light, indirect light from the VPLs when given (the subset and stride of
 /// interleaved sampling, `(0, 1)` for all), and its own reflection, while depth remains.
 #[cfg(test)]
@@ -187,11 +187,11 @@ fn reflected(
     let mut weight = Vec3::ONE;
     let mut hit = *first;
     for _ in 0..r.scene.settings.max_depth {
-        let ks = r.scene.materials[r.scene.material[hit.tri as usize] as usize].ks;
-        if ks == Vec3::ZERO {
+        let kr = r.scene.materials[r.scene.material[hit.tri as usize] as usize].mirror;
+        if kr == Vec3::ZERO {
             break;
         }
-        weight *= ks;
+        weight *= kr;
         // Reflect about the shading normal; fall back to the geometric one if that would send
         // the ray into the surface.
         let mut dir = reflect(-hit.wo, hit.ns);
@@ -255,7 +255,7 @@ mod tests {
             let mut mirrors = 0;
             for (i, hit) in g.iter().enumerate() {
                 let Some(hit) = hit else { continue };
-                if r.scene.materials[r.scene.material[hit.tri as usize] as usize].ks == Vec3::ZERO {
+                if !r.scene.materials[r.scene.material[hit.tri as usize] as usize].is_mirror() {
                     assert_eq!(out[i], Vec3::ZERO);
                     continue;
                 }

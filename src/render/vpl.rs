@@ -147,8 +147,8 @@ pub fn generate(scene: &Scene, tracer: &hyrt_tracer::Tracer, opts: &VplOptions) 
                 let Some(h) = tracer.closest_hit(&ray, RayKind::VplPath, &mut counts) else { break };
                 let s = SurfaceHit::new(scene, &h, ray.dir);
                 let m = &scene.materials[scene.material[h.tri as usize] as usize];
-                if m.kd != Vec3::ZERO {
-                    flux *= m.kd;
+                if m.diffuse != Vec3::ZERO {
+                    flux *= m.diffuse;
                     let position = offset_ray_origin(s.p, s.p_err, s.ng, s.ng);
                     vpls.push(Vpl {
                         position,
@@ -159,9 +159,9 @@ pub fn generate(scene: &Scene, tracer: &hyrt_tracer::Tracer, opts: &VplOptions) 
                     let dir = cosine_hemisphere(s.ng, halton2(index, dim));
                     dim += 1;
                     ray = spawn_ray(s.p, s.p_err, s.ng, dir);
-                } else if m.ks != Vec3::ZERO && mirror_bounces < scene.settings.max_depth {
+                } else if m.is_mirror() && mirror_bounces < scene.settings.max_depth {
                     mirror_bounces += 1;
-                    flux *= m.ks;
+                    flux *= m.mirror;
                     let d = ray.dir - 2.0 * ray.dir.dot(s.ng) * s.ng;
                     ray = spawn_ray(s.p, s.p_err, s.ng, d);
                 } else {

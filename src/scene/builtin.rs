@@ -30,10 +30,10 @@ fn mm(x: f32, y: f32, z: f32) -> Vec3 {
 /// The Cornell box (see the module docs).
 pub fn cornell() -> Scene {
     let mut s = Scene::new("cornell");
-    let white = s.add_material(Material::diffuse("white", vec3(0.725, 0.71, 0.68)));
-    let red = s.add_material(Material::diffuse("red", vec3(0.63, 0.065, 0.05)));
-    let green = s.add_material(Material::diffuse("green", vec3(0.14, 0.45, 0.091)));
-    let mirror = s.add_material(Material { name: "mirror".into(), kd: Vec3::ZERO, ks: Vec3::splat(0.95) });
+    let white = s.add_material(Material::matte("white", vec3(0.725, 0.71, 0.68)));
+    let red = s.add_material(Material::matte("red", vec3(0.63, 0.065, 0.05)));
+    let green = s.add_material(Material::matte("green", vec3(0.14, 0.45, 0.091)));
+    let mirror = s.add_material(Material::mirror("mirror", Vec3::ZERO, Vec3::splat(0.95)));
 
     let group = |s: &mut Scene, name: &str, quads: &[[Vec3; 4]], m: u32| {
         let first = s.triangle_count() as u32;

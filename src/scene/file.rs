@@ -34,9 +34,11 @@
 //! exclude_materials = ["window_glass"]   # optional: drop triangles with these material names
 //!
 //! [[material]]                           # optional overrides, matched by material name
-//! name = "mirror"
-//! kd = [0.0, 0.0, 0.0]                   # optional
-//! ks = [1.0, 1.0, 1.0]                   # optional
+//! name = "chrome"
+//! diffuse = [0.08, 0.08, 0.08]           # optional: Kd, number or [r, g, b]
+//! highlight = 0.0                        # optional: Ks of the highlight
+//! shininess = 40.0                       # optional: its exponent Ns
+//! mirror = 0.72                          # optional: Kr, the reflection ray's weight
 //!
 //! [[light]]                              # zero or more point lights
 //! position = [0.0, 1.9, -0.03]
@@ -66,8 +68,13 @@
 //!   when looking down the axis towards the origin (right-handed). `exclude_materials` drops
 //!   every triangle whose material has one of the names (before the transform); a name that
 //!   no material of that mesh has is an error.
-//! - `[[material]]`: every material called `name`, in any mesh, gets `kd` (diffuse albedo)
-//!   and/or `ks` (mirror reflectance) set exactly as given; a name that matches no material is
+//! - `[[material]]`: every material called `name`, in any mesh, gets the parts it gives set
+//!   exactly as given, the others kept as the mesh file's loader read them (see
+//!   [`super::material`] for the model and how MTL and glTF are read): `diffuse` (albedo `Kd`),
+//!   `highlight` (`Ks` of the point lights' Blinn-Phong highlight), `shininess` (its exponent)
+//!   and `mirror` (reflectance of the Whitted reflection ray; the plan then names the scene
+//!   file as the reason the material reflects). Colours are a number (grey) or `[r, g, b]`,
+//!   finite and `>= 0`, and `shininess` finite and `>= 0`. A name that matches no material is
 //!   an error. Overrides are applied in file order after all meshes are loaded.
 //! - `[[light]]`: an isotropic point light; a single number for `intensity` means grey.
 //!
@@ -147,8 +154,10 @@ struct MeshSpec {
 #[serde(deny_unknown_fields)]
 struct MaterialSpec {
     name: String,
-    kd: Option<V3>,
-    ks: Option<V3>,
+    diffuse: Option<Splat3>,
+    highlight: Option<Splat3>,
+    shininess: Option<f32>,
+    mirror: Option<Splat3>,
 }
 
 #[derive(Deserialize)]
@@ -288,11 +297,21 @@ pub fn load(path: &Path) -> Result<Scene> {
         let mut found = false;
         for m in scene.materials.iter_mut().filter(|m| m.name == o.name) {
             found = true;
-            if let Some(kd) = o.kd {
-                m.kd = kd.0;
+            if let Some(c) = o.diffuse {
+                m.diffuse = c.0;
             }
-            if let Some(ks) = o.ks {
-                m.ks = ks.0;
+            if let Some(c) = o.highlight {
+                m.highlight = c.0;
+            }
+            if let Some(n) = o.shininess {
+                m.shininess = n;
+            }
+            if let Some(c) = o.mirror {
+                m.mirror = c.0;
+                m.mirror_source = super::MirrorSource::SceneFile;
+            }
+            if let Err(e) = m.check() {
+                bail!("{}: [[material]] '{}': {e}", at(spec.span()), o.name);
             }
         }
         if !found {

@@ -1,4 +1,4 @@
-//! glTF 2.0 / GLB loading via the gltf crate: geometry, node transforms, base colour.
+//! glTF 2.0 / GLB loading via the gltf crate: geometry, node transforms, material factors.
 //!
 //! The crate is built without its `import` feature, so buffers are resolved here: the GLB binary
 //! chunk, external files relative to the glTF file, and base64 `data:` URIs. Every accessor is
@@ -40,8 +40,8 @@ fn ignorable_extension(name: &str) -> bool {
 /// Node transforms are accumulated down the hierarchy; positions are transformed by the world
 /// matrix and normals by its inverse transpose, and triangles of mirrored nodes (negative
 /// determinant) are re-wound so they stay counter-clockwise. Only `TRIANGLES` primitives are
-/// loaded; other modes are skipped. Each glTF material becomes a diffuse [`Material`] with the
-/// base colour factor as `Kd` (textures are ignored). Each node instance of a mesh becomes a
+/// loaded; other modes are skipped. Each glTF material's metallic-roughness factors become a
+/// [`Material`] as [`Material::from_gltf`] maps them (textures are ignored). Each node instance of a mesh becomes a
 /// [`MeshRange`] named after the node (or the mesh).
 pub fn load(path: &Path) -> Result<MeshData> {
     let shown = path.display();
@@ -79,9 +79,15 @@ pub fn load(path: &Path) -> Result<MeshData> {
     let materials: Vec<Material> = document
         .materials()
         .map(|m| {
-            let c = m.pbr_metallic_roughness().base_color_factor();
+            let pbr = m.pbr_metallic_roughness();
+            let c = pbr.base_color_factor();
             let name = m.name().map_or_else(|| format!("material{}", m.index().unwrap_or(0)), str::to_string);
-            Material::diffuse(&name, Vec3::new(c[0], c[1], c[2]))
+            Material::from_gltf(
+                &name,
+                Vec3::new(c[0], c[1], c[2]),
+                pbr.metallic_factor(),
+                pbr.roughness_factor(),
+            )
         })
         .collect();
     let draco_used = document.extensions_used().any(|e| e == "KHR_draco_mesh_compression");
@@ -170,7 +176,7 @@ impl Loader<'_> {
             let material = match primitive.material().index() {
                 Some(i) if i < self.mesh.materials.len() => i as u32,
                 _ => *self.default_material.get_or_insert_with(|| {
-                    self.mesh.materials.push(Material::diffuse("default", DEFAULT_KD));
+                    self.mesh.materials.push(Material::matte("default", DEFAULT_KD));
                     (self.mesh.materials.len() - 1) as u32
                 }),
             };

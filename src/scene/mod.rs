@@ -8,41 +8,15 @@
 pub mod builtin;
 pub mod file;
 pub mod gltf;
+pub mod material;
 pub mod obj;
+
+pub use material::{Material, MirrorSource};
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use glam::{Mat4, Vec3};
-
-/// A diffuse + perfect-specular (Whitted) material.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    /// Diffuse reflectance (albedo) per RGB channel, in [0, 1].
-    pub kd: Vec3,
-    /// Mirror reflectance per channel: the weight of the Whitted reflection ray.
-    pub ks: Vec3,
-}
-
-impl Material {
-    pub fn diffuse(name: &str, kd: Vec3) -> Self {
-        Self { name: name.to_string(), kd, ks: Vec3::ZERO }
-    }
-
-    /// An MTL-style material: `illum 3` or `Ks >= 0.99` makes a perfect mirror (no diffuse
-    /// term, `Ks` as reflectance); otherwise `Ks > 0` is a partial mirror weight beside `Kd`.
-    pub fn from_mtl(name: &str, kd: Vec3, ks: Vec3, illum: Option<u8>) -> Self {
-        let perfect = illum == Some(3) || ks.max_element() >= 0.99;
-        let kd = if perfect { Vec3::ZERO } else { kd };
-        Self { name: name.to_string(), kd, ks }
-    }
-
-    /// True when this material spawns reflection rays.
-    pub fn is_specular(&self) -> bool {
-        self.ks.max_element() > 0.0
-    }
-}
 
 /// An isotropic point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -270,8 +244,8 @@ impl Scene {
             }
         }
         for m in &self.materials {
-            if !m.kd.is_finite() || !m.ks.is_finite() {
-                bail!("{origin}: material '{}' has a non-finite colour", m.name);
+            if let Err(e) = m.check() {
+                bail!("{origin}: material '{}': {e}", m.name);
             }
         }
         let s = &self.settings;
@@ -356,19 +330,14 @@ pub fn load(spec: &str) -> Result<Scene> {
 }
 
 impl Scene {
-    /// Names of materials with a mirror reflectance that at least one triangle uses.
-    pub fn specular_materials_in_use(&self) -> Vec<String> {
+    /// The materials that at least one triangle uses, in material order.
+    pub fn materials_in_use(&self) -> Vec<&Material> {
         let mut used = vec![false; self.materials.len()];
         for &m in &self.material {
             if let Some(u) = used.get_mut(m as usize) {
                 *u = true;
             }
         }
-        self.materials
-            .iter()
-            .zip(used)
-            .filter(|(m, u)| *u && m.is_specular())
-            .map(|(m, _)| m.name.clone())
-            .collect()
+        self.materials.iter().zip(used).filter(|(_, u)| *u).map(|(m, _)| m).collect()
     }
 }

@@ -79,6 +79,7 @@ pub fn load(path: &Path) -> Result<MeshData> {
                     &m.name,
                     m.diffuse.map_or(DEFAULT_KD, Vec3::from),
                     m.specular.map_or(Vec3::ZERO, Vec3::from),
+                    m.shininess,
                     m.illumination_model,
                 )
             })
@@ -98,7 +99,7 @@ pub fn load(path: &Path) -> Result<MeshData> {
         let material = match m.material_id.filter(|&i| i < materials.len()) {
             Some(i) => i as u32,
             None => *default_material.get_or_insert_with(|| {
-                mesh.materials.push(Material::diffuse(DEFAULT_MATERIAL, DEFAULT_KD));
+                mesh.materials.push(Material::matte(DEFAULT_MATERIAL, DEFAULT_KD));
                 (mesh.materials.len() - 1) as u32
             }),
         };
@@ -401,11 +402,20 @@ fn normalise_mtl(file: &Path, obj: &Path, text: &str) -> Result<String> {
                 if rgb.iter().any(|c| !c.is_finite()) {
                     return Err(err(format!("colour has a NaN or infinite component {}", quote(line))));
                 }
+                if keyword != "Ke" && rgb.iter().any(|&c| c < 0.0) {
+                    return Err(err(format!("negative reflectance in {}", quote(line))));
+                }
                 let _ = writeln!(out, "{keyword} {} {} {}", rgb[0], rgb[1], rgb[2]);
                 continue;
             }
             "Ns" | "Ni" | "d" if args.first().and_then(|a| a.parse::<f32>().ok()).is_none() => {
                 return Err(err(format!("malformed number in {}", quote(line))));
+            }
+            "Ns" if !args[0].parse::<f32>().is_ok_and(|n| n.is_finite() && n >= 0.0) => {
+                return Err(err(format!(
+                    "the highlight exponent must be finite and >= 0 in {}",
+                    quote(line)
+                )));
             }
             "illum" if args.first().and_then(|a| a.parse::<u8>().ok()).is_none() => {
                 return Err(err(format!("malformed illumination model (expected 0-255) in {}", quote(line))));

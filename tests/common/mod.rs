@@ -44,7 +44,7 @@ pub fn floor_scene(
     h: u32,
 ) -> Scene {
     let mut s = Scene::new("floor");
-    let m = s.add_material(Material::diffuse("floor", kd));
+    let m = s.add_material(Material::matte("floor", kd));
     s.push_quad(
         [vec3(-half, 0.0, -half), vec3(-half, 0.0, half), vec3(half, 0.0, half), vec3(half, 0.0, -half)],
         m,

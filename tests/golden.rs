@@ -60,3 +60,11 @@ fn cornell_bunny_mirror() {
     let spec = root().join("scenes/cornell-bunny-mirror.toml");
     check("cornell-bunny-mirror", spec.to_str().unwrap(), 160, 120);
 }
+
+/// The office: highlights on its `illum 2` materials, and mirrors (chrome, brass) set by its
+/// scene file; this is the golden that holds the material model's highlight term.
+#[test]
+fn office() {
+    let spec = root().join("scenes/office.toml");
+    check("office", spec.to_str().unwrap(), 160, 120);
+}

@@ -225,13 +225,14 @@ pub fn psnr(scene: &Scene, reference: &Film, film: &Film) -> anyhow::Result<f64>
     Ok(c.psnr_db)
 }
 
-/// Wrong-visibility counts of map-based shadows with `options`: (pixel, light) pairs whose map
-/// decision a shadow ray contradicts, and distinct pixels with at least one such light.
+/// Wrong-visibility counts of map-based shadows with `options`: (pixel, light) pairs whose
+/// decision (by the map, a hint or a traversal) a plain shadow ray contradicts, and distinct
+/// pixels with at least one such light.
 pub fn wrong_visibility(scene: &Scene, mut options: Options) -> (u64, u64) {
     options.check_visibility = true;
     options.keep_buffers = true;
     let f = Renderer::new(scene, options).render(&|| {});
-    let pairs = f.stats.lights.iter().filter_map(|l| l.wrong).sum();
+    let pairs = f.stats.lights.iter().filter_map(|l| l.wrong_total()).sum();
     let pixels = f.shadows.as_ref().map_or(0, |b| {
         let n = f.film.pixels.len();
         (0..n).filter(|&i| b.wrong.iter().any(|w| w.get(i).copied().unwrap_or(false))).count() as u64

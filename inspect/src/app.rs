@@ -481,7 +481,7 @@ impl Inspector {
                         ui.label(s.lit.to_string());
                         ui.label(s.shadowed.to_string());
                         ui.label(s.undecided.to_string());
-                        ui.label(s.wrong.map_or("-".into(), |w| w.to_string()));
+                        ui.label(s.wrong_total().map_or("-".into(), |w| w.to_string()));
                         ui.label(s.faces_drawn.to_string());
                         ui.label(format!("{:.1}", s.map_bytes as f64 / 1048576.0));
                         ui.end_row();
@@ -1197,7 +1197,7 @@ fn psnr_text(p: f64) -> String {
 fn wrong_text(r: &Rendered) -> String {
     match r.wrong_pixels {
         Some(px) => {
-            let pairs: u64 = r.frame.stats.lights.iter().filter_map(|l| l.wrong).sum();
+            let pairs: u64 = r.frame.stats.lights.iter().filter_map(|l| l.wrong_total()).sum();
             format!("wrong visibility: {px} pixels ({pairs} pixel-light pairs)")
         }
         None if r.options.shadows == Shadows::Rays => {

@@ -97,7 +97,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
         .map(|(l, light)| {
             let needed = surf.is_some_and(|s| {
                 scene.materials[scene.material[s.tri as usize] as usize].is_lit()
-                    && facing(&s, light).is_some()
+                    && facing(&s, light, &scene.positions[s.tri as usize]).is_some()
             });
             let map = r.maps.get(l).cloned().flatten().zip(surf).filter(|_| needed).map(|(m, s)| {
                 let c = m.coord(s.p - light.position);

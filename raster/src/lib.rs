@@ -25,10 +25,13 @@
 //!   (1/512 px); callers needing the exact hit point should intersect the pixel's ray with the
 //!   triangle's plane.
 //! * **Ties**: with [`RasterOptions::depth_tie`] `= 0` (the default), when two triangles have the
-//!   same depth at a pixel the smaller id wins (then the earlier triangle in the slice, for equal
-//!   ids), so the result does not depend on the triangle order or on the number of threads. With a
+//!   same depth at a pixel a front face beats a back face, and between faces of the same facing
+//!   the smaller id wins (then the earlier triangle in the slice, for equal ids), so the result
+//!   does not depend on the triangle order or on the number of threads. Front first: where a
+//!   thin solid's side face (which the pixel's ray enters) meets its bottom face (which it
+//!   leaves) within rounding, the face seen from outside is the one shown. With a
 //!   window `depth_tie > 0`, depths `d`, `d0` with `|d - d0| <= depth_tie * max(|d|, |d0|)` are a
-//!   tie, won by the smaller id, and otherwise the closer depth wins: the rule of ray casting
+//!   tie, won the same way, and otherwise the closer depth wins: the rule of ray casting
 //!   against exact distances (for reversed-Z depths `n / w` the window is the relative distance
 //!   along the ray). Ties are decided pairwise as fragments arrive, in input order, so the result
 //!   is still independent of the thread count and the tile size; but the window is not transitive,
@@ -179,13 +182,14 @@ pub struct RasterOptions {
     /// is then the near plane `w >= n` and `z >= 0` an infinitely distant far plane. Default
     /// `false`.
     pub reversed_z: bool,
-    /// Relative depth window within which two fragments are a tie, won by the smaller id (used
-    /// by [`rasterize`] only). A fragment of depth `d` against a stored `d0`: if
-    /// `|d - d0| <= depth_tie * max(|d|, |d0|)` (in `f32`) the smaller id wins, otherwise the
-    /// closer depth (the smaller, or the larger with [`RasterOptions::reversed_z`]).
+    /// Relative depth window within which two fragments are a tie, won by a front face over a
+    /// back face, then by the smaller id (used by [`rasterize`] only). A fragment of depth `d`
+    /// against a stored `d0`: if `|d - d0| <= depth_tie * max(|d|, |d0|)` (in `f32`) the tie rule
+    /// decides, otherwise the closer depth (the smaller, or the larger with
+    /// [`RasterOptions::reversed_z`]).
     ///
     /// Why: ray casting decides between surfaces by exact distances and treats hits within a
-    /// relative window as a tie for the smaller id, so that coplanar duplicates (a surface
+    /// relative window as a tie for the face entered, then the smaller id, so that coplanar duplicates (a surface
     /// modelled twice, decals) resolve to the same triangle everywhere instead of speckling; a
     /// rasterized G-buffer must apply the same rule to agree with it. With reversed-Z the depth
     /// `n / w` makes the window the relative distance along the pixel's ray, as in the tracer.
@@ -195,7 +199,7 @@ pub struct RasterOptions {
     /// Ties are decided pairwise as fragments arrive, in input order: the result is the same for
     /// any thread count and tile size, but when three or more surfaces lie within one window of
     /// each other it may depend on the input order (the window is not transitive), unlike with
-    /// `0`. Default `0.0`: exact comparison, equal depths go to the smaller id. Values `<= 0` and
+    /// `0`. Default `0.0`: exact comparison, equal depths go by the tie rule. Values `<= 0` and
     /// NaN mean `0`; `+inf` means every pair of fragments is a tie.
     pub depth_tie: f32,
     /// Compute [`Target::bary`] (used by [`rasterize`] only). Default `true`. Callers that
@@ -236,6 +240,9 @@ pub struct Fragment {
     /// Perspective-correct barycentrics `(b1, b2)` in the original triangle (interpolated over
     /// the snapped vertices).
     pub bary: [f32; 2],
+    /// The triangle faces away from the camera (it loses depth ties to front faces: see
+    /// [`RasterOptions::depth_tie`]).
+    pub back: bool,
 }
 
 fn check_dims(width: u32, height: u32) {
@@ -459,7 +466,7 @@ pub fn for_each_fragment(
     for t in &setup {
         let [x0, y0, x1, y1] = t.bbox;
         edge::raster_rect(t, [x0, y0, x1 + 1, y1 + 1], |x, y, e| {
-            f(Fragment { x, y, depth: t.depth(e), bary: t.bary(e) });
+            f(Fragment { x, y, depth: t.depth(e), bary: t.bary(e), back: t.back });
         });
     }
 }

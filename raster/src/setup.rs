@@ -123,6 +123,9 @@ pub(crate) struct SetupTri {
     /// clamped to the target (never empty).
     pub bbox: [u32; 4],
     pub id: u32,
+    /// The polygon faces away from the camera (its snapped signed area is positive): depth ties
+    /// go to front faces first ([`crate::RasterOptions::depth_tie`]).
+    pub back: bool,
     /// Depth plane of the unsnapped polygon (module docs): `z/w = z0 + e1 * dz[0] + e2 * dz[1]`,
     /// with `e_i` the edge functions (below).
     z0: f64,
@@ -145,11 +148,18 @@ impl SetupTri {
         v: [[i32; 2]; 3],
         bbox: [u32; 4],
         id: u32,
+        back: bool,
         [z0, dz1, dz2]: [f64; 3],
         range: [f32; 2],
         persp: [[f32; 3]; 3],
     ) -> Self {
-        Self { v, bbox, id, z0, dz: [dz1, dz2], range, persp }
+        Self { v, bbox, id, back, z0, dz: [dz1, dz2], range, persp }
+    }
+
+    /// The order of depth ties: front faces before back faces, then the smaller id (crate docs).
+    #[inline(always)]
+    pub(crate) fn tie_key(&self) -> (bool, u32) {
+        (self.back, self.id)
     }
 
     /// Depth plane constants: `depth(e) = (z0 + e1 dz[0]) + e2 dz[1]` before clamping.
@@ -570,6 +580,7 @@ fn setup_unclipped(tri: &[DVec4; 3], id: u32, ctx: &SetupContext, out: &mut Vec<
         v: [xy[0], xy[b], xy[c]].map(|p| [p[0] as i32, p[1] as i32]),
         bbox,
         id,
+        back: area > 0,
         z0,
         dz: [dz[b] * inv_area, dz[c] * inv_area],
         range,
@@ -652,6 +663,8 @@ fn finish(
         v: verts.map(|p| [p.x as i32, p.y as i32]),
         bbox,
         id,
+        // Set by the caller, which knows the polygon's facing.
+        back: false,
         z0,
         dz: [dz[0] * inv_area, dz[1] * inv_area],
         range,
@@ -717,7 +730,8 @@ fn setup_polygon(pv: &[Projected], id: u32, ctx: &SetupContext, out: &mut Vec<Se
         let Some(bbox) = pixel_bounds(&verts.map(|p| xy(&p)), ctx) else {
             continue;
         };
-        let tri = finish(&verts, z0, [dz[b], dz[c]], range, tri_area, bbox, id);
+        let tri =
+            SetupTri { back: !front_facing, ..finish(&verts, z0, [dz[b], dz[c]], range, tri_area, bbox, id) };
         if !misses_every_sample(&tri) {
             out.push(tri);
         }

@@ -753,6 +753,8 @@ impl Batch {
             // In [0, width) x [0, height) by the clamps, for the lanes kept.
             self.bbox.map(|b| b[l] as u32),
             id,
+            // Swapped lanes have negative area: front faces (`setup_unclipped`).
+            self.swap >> l & 1 == 0,
             [self.z0[l], self.dz[0][l], self.dz[1][l]],
             [self.range[0][l], self.range[1][l]],
             [[q(0), 0.0, 0.0], b.1, c.1],

@@ -114,7 +114,7 @@ fn tie_winners<const REVERSED: bool, const TIE: bool>(
     while t != 0 {
         let j = t.trailing_zeros() as usize;
         let k = index(j);
-        if wins::<REVERSED, TIE>(d[j], tri.id, zb.depth[k], zb.win[k], &zb.tris, zb.tie) {
+        if wins::<REVERSED, TIE>(d[j], tri, zb.depth[k], zb.win[k], &zb.tris, zb.tie) {
             won |= 1 << j;
         }
         t &= t - 1;

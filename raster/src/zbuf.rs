@@ -26,8 +26,8 @@
 //! # Depth test and ties
 //!
 //! With a tie window `t = depth_tie > 0` ([`crate::RasterOptions::depth_tie`]), fragments whose
-//! depths are within `t` relative of each other are a tie, won by the smaller id ([`wins`]).
-//! This needs the id of the current winner, a load through its triangle index; the kernels
+//! depths are within `t` relative of each other are a tie, won by a front face, then by the
+//! smaller id ([`wins`]). This needs the tie key of the current winner, a load through its triangle index; the kernels
 //! therefore decide the (rare) ties separately, lane by lane, and the rest with vector
 //! comparisons. `depth_tie = 0` keeps the exact comparison, as a separate instance of every
 //! kernel (the const parameter `TIE`), so that it pays nothing for the window.
@@ -126,37 +126,38 @@ pub(crate) struct ZBuffer<'a> {
     empty: u32,
 }
 
-/// Whether fragment `(depth d, triangle id)` replaces the z-buffer entry `(cur, win)`.
+/// Whether fragment `(depth d, triangle tri)` replaces the z-buffer entry `(cur, win)`.
 ///
-/// Without `TIE`: lexicographic (depth, id), a total order on fragments, so the surviving
+/// Without `TIE`: lexicographic (depth, back face, id), a total order on fragments, so the surviving
 /// fragment is the same whatever order they arrive in. NaN never wins (comparisons are false).
 /// Equal (depth, id) keeps the earlier fragment: triangles arrive in input order.
 ///
 /// With `TIE` (window `tie > 0`): depths with `|d - cur| <= tie * max(|d|, |cur|)` (evaluated
 /// in `f32`, which [`in_tie_window`] and the vector kernels do identically) are a tie, won by the
-/// smaller id; otherwise the closer depth wins. Equal depths are always a tie, so this is the
+/// smaller tie key (front faces first, then the smaller id); otherwise the closer depth wins. Equal depths are always a tie, so this is the
 /// rule above with a wider notion of equality; but "within the window" is not transitive, so the
 /// survivor of three or more mutually close fragments can depend on their order (which is the
 /// input order, for any tiling and thread count).
 ///
-/// An empty entry has id [`EMPTY_ID`], which no set-up triangle has, and depth `+inf` or `0`
+/// An empty entry has the key `(back, EMPTY_ID)`, above any set-up triangle's, and depth `+inf` or `0`
 /// (reversed), so every fragment that is not NaN beats it, with either rule: it is closer, or a
 /// tie won on the id.
 #[inline(always)]
 pub(crate) fn wins<const REVERSED: bool, const TIE: bool>(
     d: f32,
-    id: u32,
+    tri: &SetupTri,
     cur: f32,
     win: u32,
     tris: &[&SetupTri],
     tie: f32,
 ) -> bool {
     let closer = if REVERSED { d > cur } else { d < cur };
-    let cur_id = || if win == NONE { EMPTY_ID } else { tris[win as usize].id };
+    // The empty entry's key is above every triangle's (ids are below `EMPTY_ID`).
+    let cur_key = || if win == NONE { (true, EMPTY_ID) } else { tris[win as usize].tie_key() };
     if TIE {
-        if in_tie_window(d, cur, tie) { id < cur_id() } else { closer }
+        if in_tie_window(d, cur, tie) { tri.tie_key() < cur_key() } else { closer }
     } else {
-        closer || (d == cur && id < cur_id())
+        closer || (d == cur && tri.tie_key() < cur_key())
     }
 }
 
@@ -240,7 +241,7 @@ impl<'a> ZBuffer<'a> {
                 for j in 0..n {
                     if mask >> j & 1 != 0 {
                         let d = tri.depth([0, e1, e2]);
-                        if wins::<REVERSED, TIE>(d, tri.id, depth[j], win[j], tris, tie) {
+                        if wins::<REVERSED, TIE>(d, tri, depth[j], win[j], tris, tie) {
                             depth[j] = d;
                             win[j] = idx;
                         }

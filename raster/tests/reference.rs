@@ -14,6 +14,8 @@ fn reference(tris: &[[Vec4; 3]], ids: &[u32], w: u32, h: u32, opts: &RasterOptio
     if opts.reversed_z {
         t.depth.fill(EMPTY_DEPTH_REVERSED);
     }
+    // Whether each pixel's winner is a back face (the empty entry loses every tie).
+    let mut back = vec![true; t.id.len()];
     for (tri, &id) in tris.iter().zip(ids) {
         if id == EMPTY_ID {
             continue;
@@ -28,7 +30,9 @@ fn reference(tris: &[[Vec4; 3]], ids: &[u32], w: u32, h: u32, opts: &RasterOptio
             } else {
                 f.depth == cur
             };
-            if if tie { id < t.id[i] } else { closer } {
+            // Ties: front faces first, then the smaller id.
+            if if tie { (f.back, id) < (back[i], t.id[i]) } else { closer } {
+                back[i] = f.back;
                 t.depth[i] = f.depth;
                 t.id[i] = id;
                 t.bary[i] = f.bary;
@@ -47,7 +51,8 @@ fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {
 }
 
 /// A sphere, an interpenetrating floor passing behind the camera, random overlapping triangles
-/// of all sizes, duplicates (depth ties), and copies moved by ~1e-6 relative (ties in a window).
+/// of all sizes, duplicates (depth ties), copies moved by ~1e-6 relative (ties in a window), and
+/// copies with the opposite winding (ties between front and back faces).
 fn scene(cam: &Camera) -> (Vec<[Vec4; 3]>, Vec<u32>) {
     let (verts, idx) = uv_sphere(DVec3::ZERO, 1.0, 96, 60, DMat3::from_rotation_y(0.3));
     let mut tris = cam.clip_tris(&verts, &idx);
@@ -65,6 +70,11 @@ fn scene(cam: &Camera) -> (Vec<[Vec4; 3]>, Vec<u32>) {
     }
     for i in (0..2000).step_by(7) {
         tris.push(tris[i].map(|v| v * (1.0 + 1e-6 * (1.0 + i as f32 / 2000.0))));
+    }
+    // Copies with the opposite winding (ties between a front and a back face).
+    for i in (0..2000).step_by(11) {
+        let [a, b, c] = tris[i];
+        tris.push([a, c, b]);
     }
     // Ids in scrambled order (ties go either way), some repeated, some empty.
     let n = tris.len() as u64;

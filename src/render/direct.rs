@@ -69,8 +69,9 @@ pub fn shade(
     let highlight = m.has_highlight();
     // Irradiance at normal incidence times cos(theta), summed; and weighted by the lobe.
     let (mut sum, mut lobe_sum) = (Vec3::ZERO, Vec3::ZERO);
+    let tri = &r.scene.positions[hit.tri as usize];
     for (l, light) in r.scene.lights.iter().enumerate() {
-        let Some((wi, cos, d2)) = facing(hit, light) else { continue };
+        let Some((wi, cos, d2)) = facing(hit, light, tri) else { continue };
         if visible(l, light, hit, counts) {
             let e = light.intensity * (cos / d2);
             sum += e;

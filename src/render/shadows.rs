@@ -24,18 +24,24 @@ use hyrt_shadowmap::{
     border::{LIT, NONE, SHADOW, dilate, laplacian_border},
     classify::{Classifier, triangle_planes},
 };
-use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
+use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit, ms};
 use crate::{plan::FrameDecision, scene::PointLight};
 
-/// Whether `light` can light `hit` at all (a light with some intensity, in front of both
-/// normals, not at the point): the condition under which the reference casts a shadow ray.
-/// `Some((wi, cos, d2))` if so.
+/// Whether `light` can light `hit` at all (a light with some intensity, strictly in front of
+/// the surface's plane and of its shading normal, not at the point): the condition under which
+/// the reference casts a shadow ray. `Some((wi, cos, d2))` if so. `tri` is the hit triangle's
+/// corners.
+///
+/// The side of the plane is decided from the triangle's corners and the light alone
+/// ([`plane_side`]), not from `ng . (light - p)`: the shading point's rounding error is as large
+/// as that product near a light lying in the plane, whose every exact evaluation is 0. A light
+/// in the plane therefore lights none of it, in the reference and the hybrid alike.
 #[inline]
-pub fn facing(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32, f32)> {
+pub fn facing(hit: &SurfaceHit, light: &PointLight, tri: &[Vec3; 3]) -> Option<(Vec3, f32, f32)> {
     // A dark light adds nothing: no ray, no map (the plan says so).
     if light.intensity.max_element() <= 0.0 {
         return None;
@@ -47,10 +53,18 @@ pub fn facing(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32, f32)> 
     }
     let wi = to_light / d2.sqrt();
     let cos = hit.ns.dot(wi);
-    if cos <= 0.0 || hit.ng.dot(wi) <= 0.0 {
+    if cos <= 0.0 {
         return None;
     }
-    Some((wi, cos, d2))
+    // `hit.ng` is the winding's normal, flipped towards the viewer: the light must be on the
+    // viewer's side.
+    let winding = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    let front = match plane_side(tri, light.position) {
+        PlaneSide::In => return None,
+        PlaneSide::Front => hit.ng.dot(winding) > 0.0,
+        PlaneSide::Back => hit.ng.dot(winding) < 0.0,
+    };
+    front.then_some((wi, cos, d2))
 }
 
 /// Per-renderer state of map-based shadows: the light maps (and the triangle planes their
@@ -79,8 +93,22 @@ pub struct LightStats {
     pub faces_drawn: u32,
     /// Memory of the light's map (ids and distances), in bytes.
     pub map_bytes: u64,
-    /// With `Options::check_visibility`: map decisions that a shadow ray contradicts.
+    /// With `Options::check_visibility`: map decisions that a plain shadow ray contradicts.
     pub wrong: Option<u64>,
+    /// With `Options::check_visibility`: decisions of border rays answered by their occluder
+    /// hint (no traversal) that a plain shadow ray (a traversal without hint) contradicts.
+    pub wrong_hint: Option<u64>,
+    /// With `Options::check_visibility`: decisions of border rays answered by a traversal that
+    /// a plain shadow ray contradicts (the same ray: none, unless the hint path is broken).
+    pub wrong_traversal: Option<u64>,
+}
+
+impl LightStats {
+    /// With `Options::check_visibility`: every decision a plain shadow ray contradicts (by the
+    /// map, a hint or a traversal).
+    pub fn wrong_total(&self) -> Option<u64> {
+        Some(self.wrong? + self.wrong_hint? + self.wrong_traversal?)
+    }
 }
 
 /// The per-pixel buffers of a frame's map-based shadows, one vector per light, row-major. Kept
@@ -97,7 +125,8 @@ pub struct ShadowBuffers {
     pub hint: Vec<Vec<u32>>,
     /// The map-space border test's verdict.
     pub map_border: Vec<Vec<bool>>,
-    /// With `check_visibility`: the map decisions a shadow ray contradicts (else empty).
+    /// With `check_visibility`: the decisions a plain shadow ray contradicts, whoever made
+    /// them: the map, or a border ray answered by its hint or by a traversal (else empty).
     pub wrong: Vec<Vec<bool>>,
     /// With `Options::keep_buffers` (else empty): the border before dilation (pixels with a
     /// decision only), and what each undecided pixel's shadow ray did: [`RAY_NONE`],
@@ -265,7 +294,7 @@ impl Renderer<'_> {
                     bits.fill(0);
                     let Some(s) = s else { continue };
                     for (l, light) in lights.iter().enumerate() {
-                        if facing(s, light).is_some() {
+                        if facing(s, light, &self.scene.positions[s.tri as usize]).is_some() {
                             bits[l / 8] |= 1 << (l % 8);
                         }
                     }
@@ -412,8 +441,9 @@ impl Renderer<'_> {
 
 impl Shadowing<'_> {
     /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
-    /// answer replaces the map's in `occ`. With `check` (wrong-visibility count), also a ray
-    /// per decided (pixel, light), not counted as a frame ray, comparing the map's decision.
+    /// answer replaces the map's in `occ`. With `check` (wrong-visibility count), also a plain
+    /// shadow ray (no hint) per (pixel, light), not counted as a frame ray, checking every
+    /// decision: the map's, the hint's and the traversal's, counted apart.
     pub fn trace(&mut self, r: &Renderer, check: bool) -> RayCounts {
         let w = r.scene.settings.width.max(1) as usize;
         let n = self.bufs.surf.len();
@@ -485,13 +515,15 @@ impl Shadowing<'_> {
                 Some(v) => v.chunks_mut(w).collect(),
                 None => (0..n.div_ceil(w)).map(|_| &mut [][..]).collect(),
             };
-            let counts: Vec<RayCounts> = occ
+            // Per row: frame rays, and wrong decisions by [map, hint, traversal].
+            let counts: Vec<(RayCounts, [u64; 3])> = occ
                 .par_chunks_mut(w)
                 .zip(wrong_rows)
                 .zip(ray_rows)
                 .enumerate()
                 .map(|(y, ((row, wrong_row), ray_row))| {
                     let mut c = RayCounts::default();
+                    let mut wrong_by = [0u64; 3];
                     for (x, o) in row.iter_mut().enumerate() {
                         let i = y * w + x;
                         let is_und = und.get(i).copied().unwrap_or(false);
@@ -500,30 +532,36 @@ impl Shadowing<'_> {
                         }
                         let s = surf[i].as_ref().expect("classified pixels have a hit");
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
+                        // Who decides: 0 the map, 1 the hint, 2 a traversal.
+                        let mut by = 0;
                         if is_und {
                             let before = c;
                             let blocked = r.tracer.occluded_with_hint(&ray, hint[i], &mut c);
                             r.pixel_rays.add(i, &before, &c);
+                            by = if c.shadow_hint_hits > before.shadow_hint_hits { 1 } else { 2 };
                             if let Some(k) = ray_row.get_mut(x) {
-                                *k = if c.shadow_hint_hits > before.shadow_hint_hits {
-                                    RAY_HINT
-                                } else {
-                                    RAY_TRAVERSAL
-                                };
+                                *k = if by == 1 { RAY_HINT } else { RAY_TRAVERSAL };
                             }
                             *o = if blocked { SHADOW } else { LIT };
-                        } else {
-                            let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
-                            wrong_row[x] = truth != (*o == SHADOW);
                         }
+                        let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
+                        let wrong = truth != (*o == SHADOW);
+                        wrong_row[x] = wrong;
+                        wrong_by[by] += u64::from(wrong);
                     }
-                    c
+                    (c, wrong_by)
                 })
                 .collect();
-            total += counts.into_iter().sum();
-            if check {
-                self.lights[l].wrong = Some(b.wrong[l].iter().filter(|&&x| x).count() as u64);
+            let mut wrong_by = [0u64; 3];
+            for (c, by) in counts {
+                total += c;
+                for k in 0..3 {
+                    wrong_by[k] += by[k];
+                }
             }
+            let st = &mut self.lights[l];
+            (st.wrong, st.wrong_hint, st.wrong_traversal) =
+                (Some(wrong_by[0]), Some(wrong_by[1]), Some(wrong_by[2]));
         }
         total
     }

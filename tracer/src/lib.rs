@@ -4,8 +4,8 @@
 //! It gives closest hits and occlusion tests that are
 //! - **watertight** ([`triangle`]: Woop, Benthin and Wald 2013, with pbrt-v4's conservative
 //!   `t > 0` bound), so rays through shared edges and vertices never slip between triangles;
-//! - **deterministic**: ties at exactly equal distance go to the smaller original triangle id,
-//!   whatever order the BVH visits them in;
+//! - **deterministic**: ties (hits within [`DEPTH_TIE`]) go to a face the ray enters, then to
+//!   the smaller original triangle id, whatever order the BVH visits them in;
 //! - **free of self-intersection without magic epsilons**: hit points carry a rounding-error
 //!   bound and new rays start from an origin offset just past it ([`offset`]);
 //! - **counted** by kind ([`RayCounts`]), per caller, so parallel passes reduce in a fixed order.
@@ -13,6 +13,7 @@
 pub mod batch;
 pub mod counts;
 pub mod offset;
+pub mod orient;
 pub mod triangle;
 
 use std::time::Duration;
@@ -28,15 +29,21 @@ use obvhs::{
 pub use batch::{Kernel, RowRays};
 pub use counts::{RayCounts, RayKind};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
+pub use orient::{PlaneSide, plane_side};
 pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle};
 
-/// Relative distance within which two hits count as a depth tie, decided for the smaller
-/// triangle id: `2^-16`, 15 micrometres per metre.
+/// Relative distance within which two hits count as a depth tie, decided for the face the ray
+/// enters, then for the smaller triangle id: `2^-16`, 15 micrometres per metre.
 ///
 /// Why a tolerance: coplanar duplicates (a desk top modelled twice, decals) are hit at
 /// distances that differ only by rounding, so "the nearer" is noise, a speckle that differs
 /// between ray casting and rasterization and between neighbouring pixels. Within this window
-/// the smaller id wins, in the tracer and in the rasterized G-buffer alike. The window is 128
+/// a face that the ray enters (its origin is on the front side of the face's plane, decided
+/// exactly by [`plane_side`]) beats one that it leaves, and otherwise the smaller id wins, in
+/// the tracer and in the rasterized G-buffer alike (whose front faces are those the camera's
+/// rays enter). Why the facing first: where a thin bar's side face meets its bottom face, a ray
+/// entering the side and leaving through the bottom within the window must see the side, lit
+/// from outside, not the bottom seen from inside, whatever the ids. The window is 128
 /// times the f32 unit roundoff: above the few-ulp error of the watertight test's `t` and of an
 /// exactly interpolated depth, and far below any gap between surfaces meant to be distinct.
 /// Ties are decided pairwise as candidates arrive (in the BVH's fixed order), so the result
@@ -183,38 +190,44 @@ impl Tracer {
     }
 
     /// The nearest hit with `0 < t < ray.tmax`; hits within [`DEPTH_TIE`] of each other go to
-    /// the smaller triangle id.
+    /// a face the ray enters, then to the smaller triangle id.
     pub fn closest_hit(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> Option<Hit> {
         counts.add(kind, 1);
         if self.bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
             return None;
         }
         let (ob, pre) = self.scaled(ray);
-        let mut best: Option<(f32, u32, [f32; 3])> = None;
+        let origin = ray.origin * self.scale;
+        // The tie key of BVH slot `i`: faces the ray leaves after those it enters, then the id.
+        let key = |i: usize| {
+            let enters = plane_side(&self.tris[i].map(Vec3::from), origin) == PlaneSide::Front;
+            (!enters, self.ids[i])
+        };
+        // (t, BVH slot, barycentrics) of the best hit so far.
+        let mut best: Option<(f32, usize, [f32; 3])> = None;
         self.bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
             let Some(h) = intersect_triangle(&pre, &self.tris[i], r.tmax) else {
                 return f32::INFINITY;
             };
-            let id = self.ids[i];
             let better = match best {
                 None => true,
-                Some((bt, bid, _)) => {
+                Some((bt, bi, _)) => {
                     if depth_tie(h.t, bt) {
-                        id < bid
+                        key(i) < key(bi)
                     } else {
                         h.t < bt
                     }
                 }
             };
             if better {
-                best = Some((h.t, id, h.bary));
+                best = Some((h.t, i, h.bary));
             }
             // obvhs shrinks tmax to the value returned and stops visiting nodes beyond it.
             // Returning the far end of the tie window keeps every node that could still hold
-            // a tied triangle with a smaller id alive.
+            // a tied triangle that would win the tie alive.
             best.map_or(f32::INFINITY, |(bt, _, _)| (bt * (1.0 + DEPTH_TIE)).next_up())
         });
-        best.map(|(t, tri, bary)| Hit { t: t / self.scale, tri, bary })
+        best.map(|(t, i, bary)| Hit { t: t / self.scale, tri: self.ids[i], bary })
     }
 
     /// True when anything is hit with `0 < t < ray.tmax`.

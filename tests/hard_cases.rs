@@ -1,0 +1,177 @@
+//! Hard cases found from outside (issue 17): a light in a surface's plane, faces meeting at a
+//! grazing edge, and outputs kept safe when a run fails. Each test states its bound.
+
+mod common;
+
+use common::*;
+use glam::{Vec3, vec3};
+use hyrt::{
+    render::{Options, Renderer, Visibility},
+    scene::{Camera, Material, PointLight, Scene, Settings},
+};
+use hyrt_tracer::{PlaneSide, RayCounts, RayKind, Tracer, plane_side};
+
+fn settings(w: u32, h: u32) -> Settings {
+    Settings { width: w, height: h, max_depth: 5, exposure: 1.0 }
+}
+
+/// A wall through `corners` (counter-clockwise seen from the camera), lit only by a light
+/// lying exactly in its plane, near its middle.
+fn wall_with_light_in_plane(corners: [Vec3; 4], light: Vec3, eye: Vec3) -> Scene {
+    let mut s = Scene::new("wall");
+    let m = s.add_material(Material::matte("wall", Vec3::splat(0.8)));
+    s.push_quad(corners, m);
+    let centre = corners.iter().copied().sum::<Vec3>() / 4.0;
+    s.lights = vec![PointLight { position: light, intensity: Vec3::splat(50.0) }];
+    s.camera = Some(Camera::look_at(eye, centre, Vec3::Y, 50.0));
+    s.settings = settings(96, 96);
+    s.validate().unwrap();
+    s
+}
+
+/// Bound: exactly 0 radiance on every pixel, in the reference and the hybrid, for an
+/// axis-aligned wall and a tilted one, each with the light exactly in its plane (the exact
+/// cosine is 0 at every point of the plane).
+#[test]
+fn a_light_in_a_walls_plane_lights_none_of_it() {
+    let cases = [
+        // The plane z = 0.37, seen from +z.
+        (
+            [vec3(-1.0, -1.0, 0.37), vec3(1.0, -1.0, 0.37), vec3(1.0, 1.0, 0.37), vec3(-1.0, 1.0, 0.37)],
+            vec3(0.1, 0.3, 0.37),
+            vec3(0.2, 0.1, 3.0),
+        ),
+        // The plane x + y = 1, seen from the side where x + y > 1.
+        (
+            [vec3(1.0, 0.0, 2.0), vec3(1.0, 0.0, -2.0), vec3(0.0, 1.0, -2.0), vec3(0.0, 1.0, 2.0)],
+            vec3(0.25, 0.75, 0.125),
+            vec3(2.5, 2.0, 0.3),
+        ),
+    ];
+    for (corners, light, eye) in cases {
+        let scene = wall_with_light_in_plane(corners, light, eye);
+        assert_eq!(plane_side(&[corners[0], corners[1], corners[2]], light), PlaneSide::In);
+        for options in [Options::reference(), Options::hybrid()] {
+            let frame = render(&scene, options);
+            let lit: Vec<_> =
+                frame.film.pixels.iter().enumerate().filter(|(_, p)| **p != Vec3::ZERO).collect();
+            assert!(
+                lit.is_empty(),
+                "{:?}: {} pixels lit by a light in the wall's plane, e.g. {:?}",
+                options.visibility,
+                lit.len(),
+                &lit[..lit.len().min(3)]
+            );
+        }
+        // The same light moved off the plane, to the camera's side, lights the wall: the test
+        // would see light if there were any.
+        let mut off = scene.clone();
+        off.lights[0].position += (eye - light).normalize() * 0.05;
+        let frame = render(&off, Options::reference());
+        assert!(frame.film.pixels.iter().filter(|p| p.max_element() > 0.0).count() > 100);
+    }
+}
+
+/// Triangles of a box `lo..hi`, outward-facing, with the bottom face (`y = lo.y`) first, so
+/// that its ids are smaller than the sides': the old tie rule (smaller id) picked it.
+fn bar(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+    let c = |i: u32| {
+        vec3(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    let mut out = Vec::new();
+    for q in [[0, 1, 5, 4], [0, 4, 6, 2], [1, 3, 7, 5], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]] {
+        let q = q.map(c);
+        out.push([q[0], q[1], q[2]]);
+        out.push([q[0], q[2], q[3]]);
+    }
+    out
+}
+
+/// Bound: a ray through a bar's bottom edge, which enters the side face and leaves through
+/// the bottom face at the same distance, gets the side face (the one it enters), although the
+/// bottom face has the smaller ids; and each of the two faces alone is hit at that distance.
+#[test]
+fn an_exact_tie_goes_to_the_face_the_ray_enters() {
+    let tris = bar(vec3(0.0, 0.0, -1.0), vec3(0.02, 0.3, 1.0));
+    let tracer = Tracer::build(&tris);
+    let mut c = RayCounts::default();
+    // From the -x side, above the bottom plane, aimed at the edge x = 0, y = 0.
+    for z in [-0.7f32, -0.25, 0.0, 0.3, 0.55] {
+        let origin = vec3(-1.0, 0.5, z * 0.9);
+        let target = vec3(0.0, 0.0, z);
+        let ray = hyrt_tracer::Ray::new(origin, (target - origin).normalize(), f32::INFINITY);
+        let hit = tracer.closest_hit(&ray, RayKind::Primary, &mut c).expect("the bar is hit");
+        let tri = tris[hit.tri as usize];
+        assert_eq!(plane_side(&tri, origin), PlaneSide::Front, "z = {z}: got face {} ({tri:?})", hit.tri);
+        assert!(hit.tri >= 2, "z = {z}: the bottom face (ids 0, 1) was chosen");
+        // The bottom face is hit there too (the tie is real).
+        let bottom = (0..2).filter_map(|i| tracer.hits_triangle(i, &ray)).next();
+        if let Some(b) = bottom {
+            assert!(hyrt_tracer::depth_tie(b.t, hit.t), "z = {z}: {} vs {}", b.t, hit.t);
+        }
+    }
+}
+
+/// A grille of thin bars seen from above: each bar's bottom edge crosses some pixel rays
+/// within the tie window of the face they enter (the side) and the one they leave (the bottom).
+fn grille() -> Scene {
+    let mut s = Scene::new("grille");
+    let m = s.add_material(Material::matte("bar", Vec3::splat(0.7)));
+    let floor = s.add_material(Material::matte("floor", Vec3::splat(0.5)));
+    for k in 0..24 {
+        let x = -1.2 + k as f32 * 0.1;
+        for t in bar(vec3(x, 0.2, -1.5), vec3(x + 0.013, 0.24, 1.5)) {
+            s.push_triangle(t, None, m);
+        }
+    }
+    s.push_quad(
+        [vec3(-3.0, 0.0, -3.0), vec3(-3.0, 0.0, 3.0), vec3(3.0, 0.0, 3.0), vec3(3.0, 0.0, -3.0)],
+        floor,
+    );
+    s.lights = vec![PointLight { position: vec3(-2.0, 2.0, 1.0), intensity: Vec3::splat(20.0) }];
+    s.camera = Some(Camera::look_at(vec3(-3.1, 1.2, 0.4), vec3(0.0, 0.2, 0.0), Vec3::Y, 30.0));
+    s.settings = settings(160, 120);
+    s.validate().unwrap();
+    s
+}
+
+/// Bound: no pixel of the reference or of the rasterized G-buffer shows a face from behind
+/// (every visible triangle has the camera on its front side, by the exact predicate), on a
+/// scene where some pixels' rays do tie a side face with a bottom face.
+#[test]
+fn thin_bars_show_the_faces_seen_from_outside() {
+    let scene = grille();
+    let rays = Renderer::new(&scene, Options { visibility: Visibility::Rays, ..Options::default() });
+    let raster = Renderer::new(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
+    let eye = rays.camera.eye;
+    // The case arises: pixels whose ray meets a face it leaves within the tie window of its hit.
+    let tracer = Tracer::build(&scene.positions);
+    let (g, _) = rays.visibility();
+    let (w, h) = (scene.settings.width, scene.settings.height);
+    let mut ties = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let Some(hit) = g[(y * w + x) as usize] else { continue };
+            let ray = rays.camera_ray(x, y);
+            let leaves = (0..scene.positions.len() as u32).any(|t| {
+                plane_side(&scene.positions[t as usize], eye) == PlaneSide::Back
+                    && tracer.hits_triangle(t, &ray).is_some_and(|o| hyrt_tracer::depth_tie(o.t, hit.t))
+            });
+            ties += usize::from(leaves);
+        }
+    }
+    assert!(ties >= 3, "only {ties} pixels with a tie between a face entered and one left");
+    for (name, r) in [("rays", &rays), ("raster", &raster)] {
+        let (g, _) = r.visibility();
+        let from_behind = g
+            .iter()
+            .flatten()
+            .filter(|h| plane_side(&scene.positions[h.tri as usize], eye) == PlaneSide::Back)
+            .count();
+        assert_eq!(from_behind, 0, "{name}: {from_behind} pixels show a face from behind");
+    }
+}

@@ -24,8 +24,8 @@ use serde::Serialize;
 
 use crate::{
     cli::Knobs,
-    film::atomic_write,
     measure::{self, Config, MeasureOptions, Measurement},
+    output::atomic_write,
 };
 
 /// Arguments of `hyrt bench`.

@@ -10,8 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use hyrt_shadowmap::MapKind;
 
 use crate::{
-    film::atomic_write,
-    metrics,
+    metrics, output,
     render::{Borders, Indirect, MirrorShadows, Options, Renderer, Shadows, Visibility, indirect::VplFilter},
     scene,
     stats::RenderStats,
@@ -456,10 +455,9 @@ fn render(a: &RenderArgs) -> Result<()> {
         (None, Some(_)) => None,
         (None, None) => Some(PathBuf::from(format!("{}.png", scene.name))),
     };
-    // Refuse before rendering if an output cannot be written at all.
-    for p in png.iter().chain(&a.exr).chain(&a.stats) {
-        check_writable(p)?;
-    }
+    // Refuse before rendering if the outputs cannot all be written.
+    let outputs: Vec<&Path> = png.iter().chain(&a.exr).chain(&a.stats).map(PathBuf::as_path).collect();
+    output::check_outputs(&outputs)?;
 
     let options = a.knobs.options_for(&scene)?;
     let renderer = Renderer::new(&scene, options);
@@ -505,20 +503,25 @@ fn render(a: &RenderArgs) -> Result<()> {
         times.join(", ")
     ));
     for (l, s) in frame.stats.lights.iter().enumerate() {
-        let wrong = s.wrong.map_or(String::new(), |w| format!(", {w} wrong"));
+        let wrong = match (s.wrong, s.wrong_hint, s.wrong_traversal) {
+            (Some(m), Some(h), Some(t)) => {
+                format!(", wrong: {m} by the map, {h} by a hint, {t} by a traversal")
+            }
+            _ => String::new(),
+        };
         say(format!(
             "light {l}: {} lit, {} shadowed, {} undecided (rays){wrong}; {} map face(s)",
             s.lit, s.shadowed, s.undecided, s.faces_drawn
         ));
     }
 
+    // Every output is written before any is moved into place: a failure leaves all as they were.
+    let mut staged = Vec::new();
     if let Some(p) = &png {
-        frame.film.write_png(p, scene.settings.exposure)?;
-        say(format!("wrote {}", p.display()));
+        staged.push(output::stage(p, |tmp| frame.film.save_png(tmp, scene.settings.exposure))?);
     }
     if let Some(p) = &a.exr {
-        frame.film.write_exr(p)?;
-        say(format!("wrote {}", p.display()));
+        staged.push(output::stage(p, |tmp| frame.film.save_exr(tmp))?);
     }
     if let Some(p) = &a.stats {
         let opts = options_json(&options, scene.settings.max_depth);
@@ -527,17 +530,12 @@ fn render(a: &RenderArgs) -> Result<()> {
             stats = stats.with_raster(renderer.raster_stats());
         }
         let json = serde_json::to_string_pretty(&stats)?;
-        atomic_write(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?;
-        say(format!("wrote {}", p.display()));
+        staged.push(output::stage(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?);
     }
-    Ok(())
-}
-
-/// Fails early, naming the file, when `p`'s directory does not exist.
-fn check_writable(p: &Path) -> Result<()> {
-    let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        bail!("{}: cannot write: directory {} does not exist", p.display(), dir.display());
+    let written: Vec<PathBuf> = staged.iter().map(|s| s.path().to_path_buf()).collect();
+    output::commit_all(staged)?;
+    for p in written {
+        say(format!("wrote {}", p.display()));
     }
     Ok(())
 }

@@ -1,12 +1,15 @@
 //! The film: linear RGB radiance per pixel, written as EXR (linear) or PNG (8-bit sRGB).
 //!
-//! Files are written to a temporary file in the destination directory and renamed into place,
-//! so a failure never leaves a half-written image and never destroys an existing one.
+//! Files are written through [`crate::output`]: to a temporary file in the destination
+//! directory, renamed into place, so a failure never leaves a half-written image and never
+//! destroys an existing one.
 
 use std::path::Path;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use glam::Vec3;
+
+use crate::output::atomic_write;
 
 /// Linear radiance, row-major, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,24 +48,22 @@ impl Film {
             .collect()
     }
 
-    /// Writes an 8-bit sRGB PNG.
-    pub fn write_png(&self, path: &Path, exposure: f32) -> Result<()> {
+    /// Writes an 8-bit sRGB PNG to `path` as it is (see [`Film::write_png`] for the safe way).
+    pub fn save_png(&self, path: &Path, exposure: f32) -> Result<()> {
         let bytes = self.to_srgb8(exposure);
-        atomic_write(path, |tmp| {
-            image::save_buffer_with_format(
-                tmp,
-                &bytes,
-                self.width,
-                self.height,
-                image::ColorType::Rgb8,
-                image::ImageFormat::Png,
-            )
-            .map_err(Into::into)
-        })
+        image::save_buffer_with_format(
+            path,
+            &bytes,
+            self.width,
+            self.height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(Into::into)
     }
 
-    /// Writes a linear float RGB OpenEXR file (uncompressed, 32-bit float).
-    pub fn write_exr(&self, path: &Path) -> Result<()> {
+    /// Writes a linear float RGB OpenEXR file (uncompressed, 32-bit float) to `path` as it is.
+    pub fn save_exr(&self, path: &Path) -> Result<()> {
         use exr::prelude::*;
         let (w, h) = (self.width as usize, self.height as usize);
         let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
@@ -70,33 +71,16 @@ impl Film {
             (c.x, c.y, c.z)
         });
         let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::UNCOMPRESSED, channels);
-        atomic_write(path, |tmp| {
-            Image::from_layer(layer).write().non_parallel().to_file(tmp).map_err(Into::into)
-        })
+        Image::from_layer(layer).write().non_parallel().to_file(path).map_err(Into::into)
     }
-}
 
-/// Runs `write` on a temporary path beside `path`, then renames it over `path`.
-pub fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if path.file_name().is_none() {
-        bail!("{}: not a file name", path.display());
+    /// Writes an 8-bit sRGB PNG atomically ([`atomic_write`]).
+    pub fn write_png(&self, path: &Path, exposure: f32) -> Result<()> {
+        atomic_write(path, |tmp| self.save_png(tmp, exposure))
     }
-    let mut builder = tempfile::Builder::new();
-    // Temporary files are private (0600) by default; the finished file should get the usual
-    // permissions (0666 less the umask), like any file the user creates.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let tmp = builder
-        .prefix(".hyrt-")
-        .suffix(&format!(".{}", path.extension().and_then(|e| e.to_str()).unwrap_or("tmp")))
-        .tempfile_in(dir)
-        .with_context(|| format!("{}: cannot create a file in {}", path.display(), dir.display()))?;
-    write(tmp.path()).with_context(|| format!("{}: cannot write image", path.display()))?;
-    tmp.persist(path)
-        .with_context(|| format!("{}: cannot move the finished file into place", path.display()))?;
-    Ok(())
+
+    /// Writes a linear OpenEXR file atomically ([`atomic_write`]).
+    pub fn write_exr(&self, path: &Path) -> Result<()> {
+        atomic_write(path, |tmp| self.save_exr(tmp))
+    }
 }

@@ -17,7 +17,7 @@ use plotters::{
     prelude::*,
 };
 
-use crate::film::atomic_write;
+use crate::output::atomic_write;
 
 /// Which points are on the Pareto front of `points` = `(time, quality)`: lower time and higher
 /// quality are better, and a point is on the front when no other point is at least as good in

@@ -37,9 +37,10 @@ use clap::Args;
 
 use crate::{
     cli::{Knobs, options_json, parse_size},
-    film::{Film, atomic_write},
+    film::Film,
     measure::{Config, MeasureOptions, Measurement, measure},
     metrics::{DisplayImage, flip_mean},
+    output::atomic_write,
     plot,
     render::{Indirect, Options, Shadows},
     scene::Scene,

@@ -453,3 +453,71 @@ fn bench_writes_the_thesis_tables() {
     let (ok, _, err) = common::hyrt(&["bench", "missing-scene.toml", "--out", out]);
     assert!(!ok && err.contains("missing-scene.toml"), "{err}");
 }
+
+/// A failed run leaves every existing output as it was, and refuses before rendering: an
+/// output that is a directory (for any of `-o`, `--exr`, `--stats`) and one file named for two
+/// outputs are errors, and no temporary file is left behind.
+#[test]
+fn failed_runs_keep_existing_outputs() {
+    let d = out_dir("outputs_kept");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (png, exr, stats, sub) =
+        (d.join("old.png"), d.join("old.exr"), d.join("old.json"), d.join("somedir"));
+    fs::create_dir(&sub).unwrap();
+    for p in [&png, &exr, &stats] {
+        fs::write(p, b"precious").unwrap();
+    }
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["-o".into(), s(&png), "--exr".into(), s(&sub)], "it is a directory"),
+        (vec!["-o".into(), s(&png), "--exr".into(), s(&exr), "--stats".into(), s(&sub)], "it is a directory"),
+        (vec!["-o".into(), s(&sub)], "it is a directory"),
+        (vec!["-o".into(), s(&png), "--exr".into(), s(&png)], "the same file is given for two outputs"),
+        (vec!["-o".into(), s(&png), "--stats".into(), s(&d.join(".").join("old.png"))], "the same file"),
+        (vec!["-o".into(), s(&png), "--exr".into(), s(&d.join("missing/x.exr"))], "does not exist"),
+    ];
+    for (outputs, expected) in cases {
+        let mut args = vec!["render", "cornell", "--size", "16x16", "-q"];
+        args.extend(outputs.iter().map(String::as_str));
+        let (ok, _, err) = hyrt(&args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        for p in [&png, &exr, &stats] {
+            assert_eq!(read(p), b"precious", "{args:?} changed {}", p.display());
+        }
+    }
+    let left: Vec<_> = fs::read_dir(&d).unwrap().flatten().map(|e| e.file_name()).collect();
+    assert_eq!(left.len(), 4, "temporaries left behind: {left:?}");
+}
+
+/// A render stopped by SIGTERM while it writes leaves no temporary file (and the old output).
+#[cfg(unix)]
+#[test]
+fn a_terminated_render_leaves_no_temporaries() {
+    let d = out_dir("terminated");
+    let png = d.join("big.png");
+    fs::write(&png, b"precious").unwrap();
+    let exr = d.join("big.exr");
+    // Large enough that the EXR takes a while to write; killed once its temporary exists.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_hyrt"))
+        .args(["render", "cornell", "--size", "3000x3000", "--max-depth", "0", "-q", "-o"])
+        .arg(&png)
+        .arg("--exr")
+        .arg(&exr)
+        .spawn()
+        .unwrap();
+    let temporary =
+        || fs::read_dir(&d).unwrap().flatten().any(|e| e.file_name().to_string_lossy().starts_with(".hyrt-"));
+    let start = std::time::Instant::now();
+    while !temporary() && child.try_wait().unwrap().is_none() && start.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    assert!(temporary(), "no temporary output seen while the render ran");
+    // SIGTERM, as `kill` sends it.
+    let _ = std::process::Command::new("kill").arg(child.id().to_string()).status();
+    let status = child.wait().unwrap();
+    assert!(!temporary(), "a temporary was left behind ({status})");
+    if !status.success() {
+        assert_eq!(read(&png), b"precious", "a terminated run replaced the old output");
+    }
+}

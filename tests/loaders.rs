@@ -289,7 +289,15 @@ fn obj_nan_vertex() {
 fn obj_face_index_out_of_range() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
-    assert_contains(&err_text(obj::load(&p)), &["bad.obj:5: face index 9 is out of range", "'f 1 2 9'"]);
+    assert_contains(
+        &err_text(obj::load(&p)),
+        &["bad.obj:5: face index 9 is out of range (only 3 vertices defined", "'f 1 2 9'"],
+    );
+    let p = write(dir.path(), "one.obj", "v 0 0 0\nf 1 2 3\n");
+    assert_contains(
+        &err_text(obj::load(&p)),
+        &["one.obj:2: face index 2 is out of range (only 1 vertex defined"],
+    );
     let p = write(dir.path(), "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
     assert_contains(&err_text(obj::load(&p)), &["zero.obj:4: face index 0 is invalid"]);
     let p = write(dir.path(), "neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n");

@@ -282,7 +282,8 @@ fn check_numbers(line: &str, args: &[&str], n: usize, what: &str, finite: bool) 
 /// indices only when the file has such elements (tobj ignores them otherwise). Faces with fewer
 /// than three corners are ignored by the loader, so only their syntax is checked.
 fn check_face(line: &str, args: &[&str], counts: [usize; 3]) -> Option<String> {
-    const WHAT: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    const WHAT: [(&str, &str); 3] =
+        [("vertex", "vertices"), ("texture coordinate", "texture coordinates"), ("normal", "normals")];
     if args.is_empty() {
         return Some(format!("face without vertices {}", quote(line)));
     }
@@ -307,9 +308,8 @@ fn check_face(line: &str, args: &[&str], counts: [usize; 3]) -> Option<String> {
             let checked = k == 0 || n > 0;
             if args.len() >= 3 && checked && !in_range {
                 return Some(format!(
-                    "face index {index} is out of range (only {n} {}{} defined before this line) {}",
-                    WHAT[k],
-                    if n == 1 { "" } else { "s" },
+                    "face index {index} is out of range (only {n} {} defined before this line) {}",
+                    if n == 1 { WHAT[k].0 } else { WHAT[k].1 },
                     quote(line)
                 ));
             }

@@ -513,8 +513,9 @@ fn a_terminated_render_leaves_no_temporaries() {
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
     assert!(temporary(), "no temporary output seen while the render ran");
-    // SIGTERM, as `kill` sends it.
-    let _ = std::process::Command::new("kill").arg(child.id().to_string()).status();
+    // SIGTERM, by the shell's built-in `kill` (no kill binary needed).
+    let sent = std::process::Command::new("sh").args(["-c", &format!("kill -TERM {}", child.id())]).status();
+    assert!(sent.is_ok_and(|s| s.success()) || child.try_wait().unwrap().is_some(), "kill failed");
     let status = child.wait().unwrap();
     assert!(!temporary(), "a temporary was left behind ({status})");
     if !status.success() {

@@ -21,7 +21,7 @@ use std::time::Duration;
 use glam::{Vec3, Vec3A};
 use obvhs::{
     BvhBuildParams,
-    cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
+    cwbvh::{CwBvh, builder::build_cwbvh},
     ray::{Ray as ObRay, RayHit},
     triangle::Triangle,
 };
@@ -54,6 +54,32 @@ pub const DEPTH_TIE: f32 = 1.0 / 65536.0;
 #[inline]
 pub fn depth_tie(a: f32, b: f32) -> bool {
     (a - b).abs() <= DEPTH_TIE * a.max(b)
+}
+
+/// Padding of every triangle's box in the BVH, in the tracer's scaled frame (coordinates of
+/// magnitude below `2^20`, see [`Tracer::build`]): 2 units, 16 to 32 ulps of the largest
+/// coordinates.
+///
+/// Why: obvhs's ray-box test is not conservative. Its slab distances
+/// `(q * extent + (node - o)) / d` are rounded (a few ulps of `|node - o| < 2^21` for a ray
+/// starting inside the scene's bounds, about a quarter unit), so a ray that meets a triangle
+/// lying on a face of its node's box (axis-aligned geometry: every box of a furnished room)
+/// can miss the box by an ulp while the watertight triangle test hits it. Shadow rays then
+/// leak through the edges of boxes, and a ray that tests its occluder hint first (which never
+/// visits a box) disagrees with the same ray traversed. Boxes larger by 2 units than their
+/// triangles contain every such rounding; the cost is nil (a millionth of the scene's extent).
+/// Rays that start farther than the scene's bounds from it (a distant camera) are not covered
+/// by this bound; their misses are what the box test's rounding gives.
+const BOX_PAD: f32 = 2.0;
+
+/// A triangle whose BVH box is padded by [`BOX_PAD`].
+struct Padded(Triangle);
+
+impl obvhs::Boundable for Padded {
+    fn aabb(&self) -> obvhs::aabb::Aabb {
+        let b = self.0.aabb();
+        obvhs::aabb::Aabb::new(b.min - Vec3A::splat(BOX_PAD), b.max + Vec3A::splat(BOX_PAD))
+    }
 }
 
 /// A ray with a normalised direction; hits are accepted for `0 < t < tmax`.
@@ -148,7 +174,8 @@ impl Tracer {
         let bvh = if kept.is_empty() {
             CwBvh::default()
         } else {
-            build_cwbvh_from_tris(&kept, BvhBuildParams::medium_build(), &mut Duration::default())
+            let padded: Vec<Padded> = kept.iter().map(|t| Padded(*t)).collect();
+            build_cwbvh(&padded, BvhBuildParams::medium_build(), &mut Duration::default())
         };
         let (bvh_tris, ids) = bvh
             .primitive_indices

@@ -264,3 +264,111 @@ fn near_ties_go_to_the_smaller_id_and_real_gaps_to_the_nearer() {
     assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut c).unwrap().tri, 1);
     assert!(hyrt_tracer::depth_tie(10.0, 10.0 + 1e-4) && !hyrt_tracer::depth_tie(10.0, 10.0 + 1e-3));
 }
+
+/// The hit point's error bound holds: the computed point lies within the bound of the exact
+/// (f64) point for the same barycentrics, on triangles near and far from the origin; and far
+/// from the origin the bound is at most a few ulps of the coordinates (not seven).
+#[test]
+fn hit_point_error_bound_holds() {
+    let mut worst = 0.0f64;
+    for (k, offset) in [0.0f32, 1.0, 1e3, 1e5, -3e6].into_iter().enumerate() {
+        for i in 0..400 {
+            let f = |j: u32| ((i * 7919 + j * 104_729 + k as u32 * 31) % 1000) as f32 / 1000.0;
+            let o = vec3(offset, offset * 0.37, -offset * 0.61);
+            let tri = [
+                o + vec3(f(1), f(2), f(3)) * 5.0,
+                o + vec3(f(4), f(5), f(6)) * 5.0,
+                o + vec3(f(7), f(8), f(9)) * 5.0,
+            ];
+            let (b1, b2) = (f(10) * 0.5, f(11) * 0.5);
+            let b = [1.0 - b1 - b2, b1, b2];
+            let (p, err) = hit_point(&tri, b);
+            let d = |v: Vec3| v.as_dvec3();
+            let exact =
+                d(tri[0]) + (d(tri[1]) - d(tri[0])) * f64::from(b1) + (d(tri[2]) - d(tri[0])) * f64::from(b2);
+            let off = (d(p) - exact).abs();
+            for a in 0..3 {
+                assert!(
+                    off[a] <= f64::from(err[a]),
+                    "offset {offset}, triangle {i}: axis {a} off by {} > {}",
+                    off[a],
+                    err[a]
+                );
+                if err[a] > 0.0 {
+                    worst = worst.max(off[a] / f64::from(err[a]));
+                }
+            }
+            if offset.abs() >= 1e5 {
+                let ulp = |x: f32| (x.abs().next_up() - x.abs()) as f64;
+                for a in 0..3 {
+                    assert!(f64::from(err[a]) <= 2.0 * ulp(p[a]), "bound {} vs ulp {}", err[a], ulp(p[a]));
+                }
+            }
+        }
+    }
+    assert!(worst > 0.0, "no rounding seen at all");
+}
+
+/// Axis-aligned boxes (every triangle on a face of its BVH node's box) far from the origin,
+/// and shadow rays from points on them towards lights, half of them aimed exactly at a point of
+/// a box's top edge and going on past it: the traversal's answer equals the brute-force answer
+/// over every triangle with the same watertight test (no ray slips past a box's edge by the
+/// box test's rounding), and so does the hint-first answer for any hint.
+#[test]
+fn traversal_agrees_with_brute_force_on_boxes_far_away() {
+    for offset in [0.0f32, 3e4, 3e5, 1e6] {
+        let o = vec3(1.0, 0.37, -0.61) * offset;
+        let mut boxes = vec![(vec3(-2.5, -0.1, -2.5), vec3(2.5, 0.0, 2.5))];
+        for k in 0..12 {
+            let x = -2.0 + k as f32 * 0.35;
+            boxes.push((vec3(x, 0.0, -1.0 + k as f32 * 0.1), vec3(x + 0.2, 0.3 + k as f32 * 0.05, 1.2)));
+        }
+        let mut tris = Vec::new();
+        for &(lo, hi) in &boxes {
+            let c = |i: u32| {
+                o + vec3(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            };
+            for q in [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]] {
+                let q = q.map(c);
+                tris.push([q[0], q[1], q[2]]);
+                tris.push([q[0], q[2], q[3]]);
+            }
+        }
+        let tracer = Tracer::build(&tris);
+        let mut c = RayCounts::default();
+        let (mut disagree, mut blocked, mut total) = (0, 0, 0);
+        let lights = [o + vec3(0.4, 2.2, 0.9), o + vec3(-1.2, 1.8, -0.7), o + vec3(2.0, 0.35, 0.1)];
+        for i in 0..20_000u32 {
+            let f = |j: u32| {
+                (i.wrapping_mul(2_654_435_761).wrapping_add(j.wrapping_mul(40_503)) % 10_000) as f32 / 1e4
+            };
+            let t = &tris[(i as usize * 7) % tris.len()];
+            let (b1, b2) = (f(1) * 0.5, f(2) * 0.5);
+            let (p, err) = hit_point(t, [1.0 - b1 - b2, b1, b2]);
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+            let light = if i % 2 == 0 {
+                lights[i as usize % 3]
+            } else {
+                let (lo, hi) = boxes[1 + (i as usize / 2) % 12];
+                let q = o + vec3(lo.x, hi.y, lo.z + (hi.z - lo.z) * f(3));
+                p + (q - p) * 3.0
+            };
+            if n.dot(light - p) <= 0.0 {
+                continue;
+            }
+            let ray = spawn_ray_to(p, err, n, light);
+            let brute = (0..tris.len() as u32).any(|k| tracer.hits_triangle(k, &ray).is_some());
+            let traversed = tracer.occluded(&ray, RayKind::Shadow, &mut c);
+            let hinted = tracer.occluded_with_hint(&ray, (i * 13) % tris.len() as u32, &mut c);
+            total += 1;
+            blocked += usize::from(brute);
+            disagree += usize::from(brute != traversed) + usize::from(brute != hinted);
+        }
+        assert!(total > 5000 && blocked > 1000, "offset {offset}: {blocked} of {total} blocked");
+        assert_eq!(disagree, 0, "offset {offset}: {disagree} disagreements in {total} rays");
+    }
+}

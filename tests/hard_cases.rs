@@ -175,3 +175,86 @@ fn thin_bars_show_the_faces_seen_from_outside() {
         assert_eq!(from_behind, 0, "{name}: {from_behind} pixels show a face from behind");
     }
 }
+
+/// A small furnished room (about 5 units across): a floor and walls, a table (a thin top on
+/// four legs) and boxes resting on the floor, lit by two lights; everything moved by `offset`.
+fn room(offset: Vec3) -> Scene {
+    let mut s = Scene::new("room");
+    let grey = s.add_material(Material::matte("grey", Vec3::splat(0.7)));
+    let wood = s.add_material(Material::glossy("wood", vec3(0.6, 0.4, 0.25), Vec3::splat(0.1), 40.0));
+    let o = offset;
+    let quad = |s: &mut Scene, q: [Vec3; 4], m| s.push_quad(q.map(|p| p + o), m);
+    quad(
+        &mut s,
+        [vec3(-2.5, 0.0, -2.5), vec3(-2.5, 0.0, 2.5), vec3(2.5, 0.0, 2.5), vec3(2.5, 0.0, -2.5)],
+        grey,
+    );
+    quad(
+        &mut s,
+        [vec3(-2.5, 0.0, -2.5), vec3(2.5, 0.0, -2.5), vec3(2.5, 2.5, -2.5), vec3(-2.5, 2.5, -2.5)],
+        grey,
+    );
+    quad(
+        &mut s,
+        [vec3(-2.5, 0.0, -2.5), vec3(-2.5, 2.5, -2.5), vec3(-2.5, 2.5, 2.5), vec3(-2.5, 0.0, 2.5)],
+        grey,
+    );
+    let mut boxed = |lo: Vec3, hi: Vec3, m| push_box(&mut s, lo + o, hi + o, m);
+    boxed(vec3(-0.8, 0.72, -0.6), vec3(0.9, 0.76, 0.5), wood);
+    for (x, z) in [(-0.75, -0.55), (0.8, -0.55), (-0.75, 0.4), (0.8, 0.4)] {
+        boxed(vec3(x, 0.0, z), vec3(x + 0.06, 0.72, z + 0.06), wood);
+    }
+    boxed(vec3(1.2, 0.0, 1.0), vec3(1.7, 0.5, 1.6), grey);
+    boxed(vec3(-1.9, 0.0, 0.8), vec3(-1.5, 0.9, 1.1), grey);
+    boxed(vec3(-0.3, 0.76, -0.2), vec3(-0.1, 0.86, 0.0), grey);
+    s.lights = vec![
+        PointLight { position: o + vec3(0.4, 2.2, 0.9), intensity: Vec3::splat(3.0) },
+        PointLight { position: o + vec3(-1.2, 1.8, -0.7), intensity: Vec3::splat(2.0) },
+    ];
+    s.camera = Some(Camera::look_at(o + vec3(2.2, 2.0, 3.4), o + vec3(-0.2, 0.4, -0.2), Vec3::Y, 50.0));
+    s.settings = settings(320, 240);
+    s.validate().unwrap();
+    s
+}
+
+/// Pixels whose display luminance differs by more than 0.02 between two images.
+fn differing(a: &hyrt::metrics::DisplayImage, b: &hyrt::metrics::DisplayImage) -> usize {
+    use hyrt::metrics::luminance;
+    a.pixels.iter().zip(&b.pixels).filter(|(p, q)| (luminance(**p) - luminance(**q)).abs() > 0.02).count()
+}
+
+/// Bounds, for the room moved far from the origin (320 x 240, two lights):
+/// - the reference resolves it (at most 0.05 % of the pixels differ from the room at the
+///   origin) up to an offset of 1e4, 2,000 times the room's size;
+/// - the hybrid agrees with its own reference (at most 0.05 % of the pixels with a wrong
+///   decision, every decision checked by a plain shadow ray) up to 3e4, beyond that;
+/// - at every offset, up to 1e6, no border ray answered by its occluder hint or by a traversal
+///   disagrees with the plain shadow ray.
+#[test]
+fn far_from_the_origin_the_hybrid_agrees_with_its_reference() {
+    use hyrt::metrics::DisplayImage;
+    let at_origin = DisplayImage::from_film(&render(&room(Vec3::ZERO), Options::reference()).film, 1.0);
+    let bound = at_origin.pixels.len() / 2000;
+    for off in [0.0f32, 1e3, 1e4, 3e4, 1e5, 1e6] {
+        let scene = room(vec3(1.0, 0.37, -0.61) * off);
+        let reference = DisplayImage::from_film(&render(&scene, Options::reference()).film, 1.0);
+        let mut o = Options::hybrid();
+        o.check_visibility = true;
+        o.keep_buffers = true;
+        let hybrid = render(&scene, o);
+        let wrong_px = hybrid
+            .shadows
+            .as_ref()
+            .map_or(0, |b| (0..reference.pixels.len()).filter(|&i| b.wrong.iter().any(|w| w[i])).count());
+        let by_rays: u64 =
+            hybrid.stats.lights.iter().map(|l| l.wrong_hint.unwrap() + l.wrong_traversal.unwrap()).sum();
+        let moved = differing(&at_origin, &reference);
+        if off <= 1e4 {
+            assert!(moved <= bound, "offset {off}: the reference differs from the origin's on {moved} px");
+        }
+        if off <= 3e4 {
+            assert!(wrong_px <= bound, "offset {off}: {wrong_px} wrong pixels (bound {bound})");
+        }
+        assert_eq!(by_rays, 0, "offset {off}: border rays disagree with plain shadow rays");
+    }
+}

@@ -101,7 +101,12 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
             });
             let map = r.maps.get(l).cloned().flatten().zip(surf).filter(|_| needed).map(|(m, s)| {
                 let c = m.coord(s.p - light.position);
-                let cls = Classifier { map: &m, planes: &loaded.planes[..], bias: r.options.shadow.bias };
+                let cls = Classifier {
+                    map: &m,
+                    planes: &loaded.planes[..],
+                    bias: r.options.shadow.bias,
+                    point_error: loaded.point_error,
+                };
                 let lookup = cls.classify_at(s.p, s.tri, c);
                 let [tx, ty] = lookup.texel;
                 MapPick {

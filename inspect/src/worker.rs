@@ -19,7 +19,6 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use eframe::egui::ColorImage;
-use glam::Vec4;
 use hyrt::{
     camera::CameraRays,
     film::Film,
@@ -27,7 +26,10 @@ use hyrt::{
     render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, Visibility, vpl::Vpl},
     scene::Scene,
 };
-use hyrt_shadowmap::{LightMap, classify::triangle_planes};
+use hyrt_shadowmap::{
+    LightMap,
+    classify::{Plane, point_error_bound, triangle_planes},
+};
 
 use crate::views::{self, RayKindView};
 
@@ -52,7 +54,9 @@ pub struct Loaded {
     pub scene: Arc<Scene>,
     pub camera: CameraRays,
     /// Plane of every triangle: for re-classifying a picked pixel exactly as the renderer does.
-    pub planes: Arc<Vec<Vec4>>,
+    pub planes: Arc<Vec<Plane>>,
+    /// The renderer's bound on a shading point's rounding ([`Renderer::point_error`]).
+    pub point_error: f32,
     /// The options the flags selected: the knobs' starting values.
     pub options: Options,
     pub load_ms: f64,
@@ -273,6 +277,7 @@ fn run(
         scene: scene.clone(),
         camera,
         planes,
+        point_error: point_error_bound(&scene.positions),
         options,
         load_ms: t.elapsed().as_secs_f64() * 1e3,
     })));

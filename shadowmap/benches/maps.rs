@@ -80,8 +80,8 @@ fn points() -> &'static [(Vec3, u32)] {
     })
 }
 
-fn planes() -> &'static [glam::Vec4] {
-    static P: OnceLock<Vec<glam::Vec4>> = OnceLock::new();
+fn planes() -> &'static [hyrt_shadowmap::classify::Plane] {
+    static P: OnceLock<Vec<hyrt_shadowmap::classify::Plane>> = OnceLock::new();
     P.get_or_init(|| hyrt_shadowmap::classify::triangle_planes(scene()))
 }
 
@@ -96,7 +96,12 @@ fn classify(bencher: Bencher, kind: &str) {
     let maps =
         MAPS.get_or_init(|| [build(scene(), MapKind::Cube, 1024), build(scene(), MapKind::Paraboloid, 1024)]);
     let map = &maps[usize::from(kind == MapKind::Paraboloid)];
-    let cls = Classifier { map, planes: planes(), bias: 1.0 };
+    let cls = Classifier {
+        map,
+        planes: planes(),
+        bias: 1.0,
+        point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
+    };
     let pts = points();
     bencher.counter(divan::counter::ItemsCount::new(pts.len())).bench_local(|| {
         pts.iter().filter(|(p, id)| cls.classify(*p, *id).decision == hyrt_shadowmap::border::LIT).count()
@@ -154,7 +159,12 @@ fn vpl_gather(bencher: Bencher) {
     bencher.counter(divan::counter::ItemsCount::new(pts.len() * maps.len())).bench_local(|| {
         let mut seen = 0usize;
         for map in maps {
-            let cls = Classifier { map, planes: planes(), bias: 0.5 };
+            let cls = Classifier {
+                map,
+                planes: planes(),
+                bias: 0.5,
+                point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
+            };
             seen += pts.iter().filter(|(p, id)| cls.visible(*p, *id)).count();
         }
         seen
@@ -171,7 +181,12 @@ fn vpl_gather_bilinear(bencher: Bencher) {
     bencher.counter(divan::counter::ItemsCount::new(pts.len() * maps.len())).bench_local(|| {
         let mut sum = 0.0f32;
         for map in maps {
-            let cls = Classifier { map, planes: planes(), bias: 0.5 };
+            let cls = Classifier {
+                map,
+                planes: planes(),
+                bias: 0.5,
+                point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
+            };
             sum += pts.iter().map(|(p, id)| cls.visibility_at(*p, *id, cls.locate(*p))).sum::<f32>();
         }
         sum

@@ -21,10 +21,13 @@
 //! `s` (at most about one texel footprint `r * texel_angle`) a plane tilted by the dihedral angle
 //! `a` departs from the point's surface by about `s * tan(a)`: the margin is therefore
 //!
-//! `margin = bias * r * texel_angle + tol`
+//! `margin = bias * r * texel_angle + tol + band`
 //!
 //! with the knob `bias` in texel footprints (1 covers dihedral angles up to 45 degrees at the
-//! worst lateral distance) and `tol` the rounding of the point and of the plane intersection.
+//! worst lateral distance), `tol` the rounding of the plane intersection (relative to `r`: the
+//! intersection is computed relative to the light, see [`Plane`]) and `band` how far the
+//! point's own rounding can move it along the ray ([`Classifier::point_error`]; it grows with
+//! the distance from the origin, not with `r`, and is negligible near the origin).
 //! An occluder that close to the point may also be a real one (an object resting on the
 //! surface, a contact shadow), so the decision is three-way: `t < r - margin` shadowed,
 //! `t >= r - tol` lit, in between *ambiguous*, which counts as shadowed and marks the point
@@ -45,7 +48,7 @@
 //! An occluder thinner than a texel that no texel centre of the footprint sees is missed by both
 //! tests: that is what resolution buys.
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 
 use crate::border::{LIT, SHADOW};
 use crate::map::{EMPTY, LightMap, MapCoord, MapKind};
@@ -58,25 +61,72 @@ const AMBIGUOUS: u8 = 3;
 /// not count.
 pub const SHADOW_EPSILON: f32 = 1e-4;
 
-/// Rounding tolerance at the point, relative to `r + |p|`: the plane intersection and the
-/// point itself carry `f32` errors of a few ulps of those magnitudes (`1e-5` is 168 ulps of
-/// `2^-24`); an occluder within it of the point is the point's own surface.
+/// Rounding tolerance of the plane intersection, relative to `r`: it is computed relative to
+/// the light (see [`Plane`]), so its error is a few ulps of `r` (`1e-5` is 168 ulps of `2^-24`);
+/// an occluder within it of the point is the point's own surface.
 const TOLERANCE: f32 = 1e-5;
 
-/// The plane `n . x = d` (`n` unit) of each triangle, for [`Classifier`]: `Vec4(n, d)`. Zero for
-/// degenerate triangles (which then never occlude by plane; they are never drawn in maps either).
-pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Vec4> {
+/// The plane `n . x = d` of a triangle (`n` unit, `d` in `f64`), for [`Classifier`].
+///
+/// Why `d` in `f64`: the distance from a light `L` to the plane along a direction is
+/// `(d - n . L) / (n . dir)`, and far from the origin `d` and `n . L` are both about `|L|`
+/// while their difference is the light's distance to the plane: in `f32` the subtraction
+/// cancels and leaves an error of about `|L| 2^-24` (a centimetre at 1e5 metres), where the
+/// scene's own scale needs far less. With `d` and `n . L` in `f64` (the products of `f32`
+/// factors are exact there) the difference is good to about `|L| 2^-53`, and the error of the
+/// intersection is relative to the distance from the light, not to the distance from the origin.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Plane {
+    pub n: Vec3,
+    pub d: f64,
+}
+
+impl Plane {
+    /// The plane of a degenerate or non-finite triangle: never occludes by plane (such
+    /// triangles are never drawn in maps either).
+    pub const ZERO: Plane = Plane { n: Vec3::ZERO, d: 0.0 };
+
+    /// `d - n . q`, in `f64`: the signed distance from `q` to the plane, times -1.
+    #[inline]
+    pub fn offset_from(&self, q: Vec3) -> f64 {
+        let (n, q) = (self.n.as_dvec3(), q.as_dvec3());
+        self.d - (n.x * q.x + n.y * q.y + n.z * q.z)
+    }
+}
+
+/// The plane of each triangle, for [`Classifier`] (see [`Plane`]).
+pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Plane> {
     tris.iter()
         .map(|t| {
             let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
             if n == Vec3::ZERO || !t.iter().all(|v| v.is_finite()) {
-                Vec4::ZERO
+                Plane::ZERO
             } else {
                 // The centroid is the most accurate point of the plane (rounding averages out).
-                n.extend(n.dot((t[0] + t[1] + t[2]) / 3.0))
+                let c = (t[0].as_dvec3() + t[1].as_dvec3() + t[2].as_dvec3()) / 3.0;
+                Plane { n, d: n.as_dvec3().dot(c) }
             }
         })
         .collect()
+}
+
+/// A bound on the absolute rounding error, per axis, of a point interpolated on one of `tris`
+/// as `hyrt_tracer::offset::hit_point` computes it, `v0 + (b1 e1 + b2 e2)`, whose bound is
+/// `gamma(1) |p| + gamma(3) (|b1 e1| + |b2 e2|)`: here `gamma(1)` times the largest finite
+/// coordinate plus `gamma(3)` times the largest edge component (`|b1| + |b2| <= 1` inside a
+/// triangle), for [`Classifier::point_error`].
+pub fn point_error_bound(tris: &[[Vec3; 3]]) -> f32 {
+    let (mut coord, mut edge) = (0.0f32, 0.0f32);
+    for t in tris.iter().filter(|t| t.iter().all(|v| v.is_finite())) {
+        coord = coord.max(t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element());
+        edge = edge.max((t[1] - t[0]).abs().max((t[2] - t[0]).abs()).max_element());
+    }
+    let gamma = |n: f32| {
+        let u = f32::EPSILON * 0.5;
+        n * u / (1.0 - n * u)
+    };
+    // Rounded up by one relative ulp each: the products themselves round.
+    (coord * gamma(1.0)).next_up() + (edge * gamma(3.0)).next_up()
 }
 
 /// The outcome of classifying one point against one light's map.
@@ -104,9 +154,15 @@ pub struct Lookup {
 pub struct Classifier<'a> {
     pub map: &'a LightMap,
     /// [`triangle_planes`] of the triangles the map was built from.
-    pub planes: &'a [Vec4],
+    pub planes: &'a [Plane],
     /// Margin in texel footprints (module docs).
     pub bias: f32,
+    /// Absolute rounding error, per axis, of the points classified ([`point_error_bound`] for
+    /// points interpolated on the map's triangles; 0 for exact points): added to the margin
+    /// (module docs), so that a point moved off its surface by rounding is never shadowed by
+    /// its own surface's neighbours, and an occluder that the reference's offset shadow ray
+    /// might skip is left to a ray.
+    pub point_error: f32,
 }
 
 impl Classifier<'_> {
@@ -168,7 +224,7 @@ impl Classifier<'_> {
         if id == EMPTY || id == own {
             return true;
         }
-        Occluders::new(self, p, c).visible(id, (ix, iy))
+        Occluders::new(self, p, own, c).visible(id, (ix, iy))
     }
 
     /// [`Classifier::visible`] filtered over the 2x2 texels whose centres surround `p`'s
@@ -194,7 +250,7 @@ impl Classifier<'_> {
             return 1.0;
         }
         let weights = [(1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay];
-        let occ = Occluders::new(self, p, c);
+        let occ = Occluders::new(self, p, own, c);
         let mut v = 0.0;
         for ((&id, &xy), w) in foot_ids.iter().zip(&foot).zip(weights) {
             if id == EMPTY || id == own || occ.visible(id, xy) {
@@ -202,6 +258,23 @@ impl Classifier<'_> {
             }
         }
         v
+    }
+
+    /// How far along the ray from the light the rounding of a point of triangle `own` can move
+    /// it: `sqrt(3) e (1 + 1 / |n . dir|)` for the per-axis error `e` ([`Classifier::point_error`]).
+    /// The point lies up to `|n|_1 e <= sqrt(3) e` off its plane, which along a ray meeting the
+    /// plane at cosine `n . dir` is `sqrt(3) e / |n . dir|`, and its distance from the light is
+    /// off by up to `sqrt(3) e`. The reference's shadow ray starts that far off the surface
+    /// (`hyrt_tracer::offset`), so occluders within the band are left to a ray. Infinite (every
+    /// occluder left to a ray) when `own` has no plane or is seen edge-on.
+    #[inline]
+    fn rounding_band(&self, own: u32, dir: Vec3) -> f32 {
+        if self.point_error == 0.0 {
+            return 0.0;
+        }
+        let e = self.point_error * 3f32.sqrt();
+        let cos = self.planes.get(own as usize).map_or(0.0, |pl| pl.n.dot(dir).abs());
+        if cos > 0.0 { e + e / cos } else { f32::INFINITY }
     }
 
     /// [`Classifier::classify`] with `p`'s location `c` from [`Classifier::locate`].
@@ -241,16 +314,19 @@ impl Classifier<'_> {
         // between `r - margin` and `r - tol` may be a neighbouring triangle's plane extended
         // past a crease, or a true contact shadow: undecided (module docs).
         let near = SHADOW_EPSILON * r;
-        let tol = TOLERANCE * (r + p.abs().max_element());
-        let margin = self.bias * map.texel_angle(c) * r + tol;
+        let tol = TOLERANCE * r;
+        let margin = self.bias * map.texel_angle(c) * r + tol + self.rounding_band(own, dir);
         let decide = |id: u32, (x, y): (u32, u32)| -> u8 {
             if id == EMPTY || id == own {
                 return LIT;
             }
-            let pl = self.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
-            let n = pl.truncate();
-            let cos = n.dot(dir);
-            let t = if cos.abs() >= 1e-6 { (pl.w - n.dot(light)) / cos } else { map.depth(c.face, x, y) };
+            let pl = self.planes.get(id as usize).copied().unwrap_or(Plane::ZERO);
+            let cos = pl.n.dot(dir);
+            let t = if cos.abs() >= 1e-6 {
+                (pl.offset_from(light) / f64::from(cos)) as f32
+            } else {
+                map.depth(c.face, x, y)
+            };
             if !(t > near && t < r - tol) {
                 LIT
             } else if t < r - margin {
@@ -325,12 +401,13 @@ struct Occluders<'c, 'a> {
 
 impl<'c, 'a> Occluders<'c, 'a> {
     #[inline]
-    fn new(cls: &'c Classifier<'a>, p: Vec3, c: MapCoord) -> Self {
+    fn new(cls: &'c Classifier<'a>, p: Vec3, own: u32, c: MapCoord) -> Self {
         let light = cls.map.light();
         let v = p - light;
         let r = v.length();
-        let margin = cls.bias * cls.map.texel_angle(c) * r + TOLERANCE * (r + p.abs().max_element());
-        Self { cls, face: c.face, light, r, dir: v / r, margin }
+        let dir = v / r;
+        let margin = cls.bias * cls.map.texel_angle(c) * r + TOLERANCE * r + cls.rounding_band(own, dir);
+        Self { cls, face: c.face, light, r, dir, margin }
     }
 
     /// Whether triangle `id` (not empty, not the point's own), seen at texel `(x, y)`, leaves
@@ -339,11 +416,10 @@ impl<'c, 'a> Occluders<'c, 'a> {
     /// surface.
     #[inline]
     fn visible(&self, id: u32, (x, y): (u32, u32)) -> bool {
-        let pl = self.cls.planes.get(id as usize).copied().unwrap_or(Vec4::ZERO);
-        let n = pl.truncate();
-        let cos = n.dot(self.dir);
+        let pl = self.cls.planes.get(id as usize).copied().unwrap_or(Plane::ZERO);
+        let cos = pl.n.dot(self.dir);
         let t = if cos.abs() >= 1e-6 {
-            (pl.w - n.dot(self.light)) / cos
+            (pl.offset_from(self.light) / f64::from(cos)) as f32
         } else {
             self.cls.map.depth(self.face, x, y)
         };

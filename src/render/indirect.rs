@@ -9,10 +9,10 @@ use std::f32::consts::FRAC_1_PI;
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use hyrt_shadowmap::{
     LightMap, MapOptions,
-    classify::{Classifier, triangle_planes},
+    classify::{Classifier, Plane, triangle_planes},
 };
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
@@ -87,7 +87,7 @@ impl Default for IndirectOptions {
 pub(crate) struct VplCache {
     vpls: OnceLock<(Vec<vpl::Vpl>, RayCounts)>,
     maps: OnceLock<Vec<LightMap>>,
-    planes: OnceLock<Vec<Vec4>>,
+    planes: OnceLock<Vec<Plane>>,
 }
 
 impl Renderer<'_> {
@@ -111,7 +111,7 @@ pub struct Vpls<'r> {
     pub vpls: &'r [vpl::Vpl],
     /// One map per VPL with `Indirect::Maps`, else empty.
     pub maps: &'r [LightMap],
-    planes: &'r [Vec4],
+    planes: &'r [Plane],
     /// `d_min^2` in scene units.
     clamp2: f32,
 }
@@ -224,7 +224,12 @@ impl Vpls<'_> {
                 // No rays to settle it: an occluder within the bias band is taken to be the
                 // point's own curved surface (the commoner case), not a contact shadow.
                 Some(map) => {
-                    let cls = Classifier { map, planes: self.planes, bias: r.options.indirect_opts.bias };
+                    let cls = Classifier {
+                        map,
+                        planes: self.planes,
+                        bias: r.options.indirect_opts.bias,
+                        point_error: r.point_error,
+                    };
                     visibility(&cls, r.options.indirect_opts.filter, s.p, s.tri, cls.locate(s.p))
                 }
                 None => {
@@ -314,7 +319,7 @@ pub fn run(
             } else {
                 let mut located = Vec::with_capacity(irr.len());
                 for (vi, (vpl, map)) in v.vpls.iter().zip(v.maps).enumerate() {
-                    let cls = Classifier { map, planes: v.planes, bias };
+                    let cls = Classifier { map, planes: v.planes, bias, point_error: r.point_error };
                     located.clear();
                     // The band's pixels of this VPL's subset: every k-th column of every k-th
                     // row (all of them without interleaving).

@@ -243,6 +243,9 @@ pub struct Renderer<'a> {
     gbuffer: std::sync::Mutex<Vec<Option<Hit>>>,
     /// The scene's bounding box (`Scene::bounds` walks every vertex: once per scene).
     pub(crate) bounds: Option<(Vec3, Vec3)>,
+    /// The rounding error of a shading point, per axis, for map classification
+    /// ([`hyrt_shadowmap::classify::point_error_bound`]).
+    pub point_error: f32,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -276,6 +279,7 @@ impl<'a> Renderer<'a> {
             pixel_rays,
             gbuffer: Default::default(),
             bounds: scene.bounds(),
+            point_error: hyrt_shadowmap::classify::point_error_bound(&scene.positions),
         }
     }
 

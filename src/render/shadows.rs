@@ -18,11 +18,11 @@
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap,
     border::{LIT, NONE, SHADOW, dilate, laplacian_border},
-    classify::{Classifier, triangle_planes},
+    classify::{Classifier, Plane, triangle_planes},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
@@ -72,7 +72,7 @@ pub fn facing(hit: &SurfaceHit, light: &PointLight, tri: &[Vec3; 3]) -> Option<(
 #[derive(Default)]
 pub(crate) struct MapCache {
     maps: Mutex<Vec<Option<Arc<LightMap>>>>,
-    planes: std::sync::OnceLock<Vec<Vec4>>,
+    planes: std::sync::OnceLock<Vec<Plane>>,
     /// Per light and face, whether a camera hit falls on it: a renderer's scene and camera are
     /// fixed, so this is computed on the first frame only.
     needed: std::sync::OnceLock<Vec<bool>>,
@@ -165,7 +165,7 @@ pub struct Shadowing<'r> {
     pub maps: Vec<Arc<LightMap>>,
     pub bufs: ShadowBuffers,
     pub lights: Vec<LightStats>,
-    planes: &'r [Vec4],
+    planes: &'r [Plane],
 }
 
 impl Renderer<'_> {
@@ -176,7 +176,7 @@ impl Renderer<'_> {
         self.scene.materials[self.scene.material[tri as usize] as usize].is_lit()
     }
 
-    fn planes(&self) -> &[Vec4] {
+    fn planes(&self) -> &[Plane] {
         self.maps.planes.get_or_init(|| triangle_planes(&self.scene.positions))
     }
 
@@ -310,7 +310,8 @@ impl Renderer<'_> {
         stats.decisions.extend(decisions);
 
         let t = Instant::now();
-        let planes: &'r [Vec4] = self.planes();
+        let planes: &'r [Plane] = self.planes();
+        let point_error = self.point_error;
         let bias = self.options.shadow.bias;
         reset(&mut bufs.occ, nl, n, NONE);
         reset(&mut bufs.hint, nl, n, EMPTY);
@@ -324,7 +325,7 @@ impl Renderer<'_> {
         for (l, (map, ((occ, hint), mb))) in
             maps.iter().zip(bufs.occ.iter_mut().zip(&mut bufs.hint).zip(&mut bufs.map_border)).enumerate()
         {
-            let cls = Classifier { map, planes, bias };
+            let cls = Classifier { map, planes, bias, point_error };
             let (byte, bit) = (l / 8, 1u8 << (l % 8));
             occ.par_chunks_mut(band)
                 .zip(hint.par_chunks_mut(band))
@@ -581,7 +582,8 @@ impl Shadowing<'_> {
         if !map.faces_drawn()[face] {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);
         }
-        let cls = Classifier { map, planes: self.planes, bias: r.options.shadow.bias };
+        let cls =
+            Classifier { map, planes: self.planes, bias: r.options.shadow.bias, point_error: r.point_error };
         let lk = cls.classify(s.p, s.tri);
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);

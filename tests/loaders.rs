@@ -608,6 +608,13 @@ fn gltf_bad_input() {
     let p = write(dir.path(), "bad-index.gltf", &bad_index);
     assert_contains(&err_text(gltf::load(&p)), &["bad-index.gltf", "invalid glTF"]);
 
+    // An attribute naming an accessor that does not exist (the gltf crate's own validation
+    // panicked on it; found by tests/fuzz_loaders.rs).
+    let no_accessor = good.replace(r#""POSITION": 0"#, r#""POSITION": 5"#);
+    assert_ne!(no_accessor, good);
+    let p = write(dir.path(), "no-accessor.gltf", &no_accessor);
+    assert_contains(&err_text(gltf::load(&p)), &["no-accessor.gltf", "primitives[0] uses accessor 5 of 1"]);
+
     let p = write(dir.path(), "garbage.glb", "glTF\u{2}\u{0}\u{0}\u{0}garbage");
     assert_contains(&err_text(gltf::load(&p)), &["garbage.glb", "not a valid glTF"]);
 

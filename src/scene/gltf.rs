@@ -73,6 +73,19 @@ pub fn load(path: &Path) -> Result<MeshData> {
         bail!("{shown}: requires the glTF extension {ext}, which hyrt does not support{what}");
     }
     json.extensions_required.clear();
+    // gltf-json's validation reads each primitive's POSITION accessor before checking that the
+    // index exists (a panic on an index out of range): check every attribute's index first.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some((_, a)) = prim.attributes.iter().find(|(_, a)| a.value() >= json.accessors.len()) {
+                bail!(
+                    "{shown}: invalid glTF: meshes[{m}].primitives[{p}] uses accessor {} of {}",
+                    a.value(),
+                    json.accessors.len()
+                );
+            }
+        }
+    }
     let document = gltf::Document::from_json(json).map_err(|e| anyhow!("{shown}: invalid glTF: {e}"))?;
     let buffers = load_buffers(path, &document, blob)?;
 

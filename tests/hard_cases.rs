@@ -179,11 +179,16 @@ fn thin_bars_show_the_faces_seen_from_outside() {
 /// A small furnished room (about 5 units across): a floor and walls, a table (a thin top on
 /// four legs) and boxes resting on the floor, lit by two lights; everything moved by `offset`.
 fn room(offset: Vec3) -> Scene {
+    scaled_room(offset, 1.0)
+}
+
+/// [`room`] scaled by `k` about its own origin, then moved by `offset`.
+fn scaled_room(offset: Vec3, k: f32) -> Scene {
     let mut s = Scene::new("room");
     let grey = s.add_material(Material::matte("grey", Vec3::splat(0.7)));
     let wood = s.add_material(Material::glossy("wood", vec3(0.6, 0.4, 0.25), Vec3::splat(0.1), 40.0));
     let o = offset;
-    let quad = |s: &mut Scene, q: [Vec3; 4], m| s.push_quad(q.map(|p| p + o), m);
+    let quad = |s: &mut Scene, q: [Vec3; 4], m| s.push_quad(q.map(|p| p * k + o), m);
     quad(
         &mut s,
         [vec3(-2.5, 0.0, -2.5), vec3(-2.5, 0.0, 2.5), vec3(2.5, 0.0, 2.5), vec3(2.5, 0.0, -2.5)],
@@ -199,7 +204,7 @@ fn room(offset: Vec3) -> Scene {
         [vec3(-2.5, 0.0, -2.5), vec3(-2.5, 2.5, -2.5), vec3(-2.5, 2.5, 2.5), vec3(-2.5, 0.0, 2.5)],
         grey,
     );
-    let mut boxed = |lo: Vec3, hi: Vec3, m| push_box(&mut s, lo + o, hi + o, m);
+    let mut boxed = |lo: Vec3, hi: Vec3, m| push_box(&mut s, lo * k + o, hi * k + o, m);
     boxed(vec3(-0.8, 0.72, -0.6), vec3(0.9, 0.76, 0.5), wood);
     for (x, z) in [(-0.75, -0.55), (0.8, -0.55), (-0.75, 0.4), (0.8, 0.4)] {
         boxed(vec3(x, 0.0, z), vec3(x + 0.06, 0.72, z + 0.06), wood);
@@ -208,10 +213,11 @@ fn room(offset: Vec3) -> Scene {
     boxed(vec3(-1.9, 0.0, 0.8), vec3(-1.5, 0.9, 1.1), grey);
     boxed(vec3(-0.3, 0.76, -0.2), vec3(-0.1, 0.86, 0.0), grey);
     s.lights = vec![
-        PointLight { position: o + vec3(0.4, 2.2, 0.9), intensity: Vec3::splat(3.0) },
-        PointLight { position: o + vec3(-1.2, 1.8, -0.7), intensity: Vec3::splat(2.0) },
+        PointLight { position: o + vec3(0.4, 2.2, 0.9) * k, intensity: Vec3::splat(3.0 * k * k) },
+        PointLight { position: o + vec3(-1.2, 1.8, -0.7) * k, intensity: Vec3::splat(2.0 * k * k) },
     ];
-    s.camera = Some(Camera::look_at(o + vec3(2.2, 2.0, 3.4), o + vec3(-0.2, 0.4, -0.2), Vec3::Y, 50.0));
+    s.camera =
+        Some(Camera::look_at(o + vec3(2.2, 2.0, 3.4) * k, o + vec3(-0.2, 0.4, -0.2) * k, Vec3::Y, 50.0));
     s.settings = settings(320, 240);
     s.validate().unwrap();
     s
@@ -256,5 +262,26 @@ fn far_from_the_origin_the_hybrid_agrees_with_its_reference() {
             assert!(wrong_px <= bound, "offset {off}: {wrong_px} wrong pixels (bound {bound})");
         }
         assert_eq!(by_rays, 0, "offset {off}: border rays disagree with plain shadow rays");
+    }
+}
+
+/// Bound: the room scaled by 1e-6, 1e-4, 1e4 and 1e6 (intensities by the square, so the image is the
+/// same) renders within 0.05 % of the pixels of the unscaled room, in the reference and the
+/// hybrid, and the hybrid's decisions agree with plain shadow rays on all but 0.05 %.
+#[test]
+fn tiny_and_huge_scales_give_the_same_image() {
+    use hyrt::metrics::DisplayImage;
+    let shot = |s: &Scene, o: Options| DisplayImage::from_film(&render(s, o).film, 1.0);
+    let unit = room(Vec3::ZERO);
+    let (ref1, hyb1) = (shot(&unit, Options::reference()), shot(&unit, Options::hybrid()));
+    let bound = ref1.pixels.len() / 2000;
+    for k in [1e-6f32, 1e-4, 1e4, 1e6] {
+        let scene = scaled_room(Vec3::ZERO, k);
+        let moved = differing(&ref1, &shot(&scene, Options::reference()));
+        assert!(moved <= bound, "scale {k}: the reference differs on {moved} px");
+        let moved = differing(&hyb1, &shot(&scene, Options::hybrid()));
+        assert!(moved <= bound, "scale {k}: the hybrid differs on {moved} px");
+        let (_, wrong_px) = hyrt::measure::wrong_visibility(&scene, Options::hybrid());
+        assert!(wrong_px as usize <= bound, "scale {k}: {wrong_px} wrong pixels");
     }
 }

@@ -9,6 +9,7 @@ use hyrt::{
     render::{Options, Renderer, Visibility},
     scene::{Camera, Material, PointLight, Scene, Settings},
 };
+use hyrt_shadowmap::MapKind;
 use hyrt_tracer::{PlaneSide, RayCounts, RayKind, Tracer, plane_side};
 
 fn settings(w: u32, h: u32) -> Settings {
@@ -244,24 +245,27 @@ fn far_from_the_origin_the_hybrid_agrees_with_its_reference() {
     for off in [0.0f32, 1e3, 1e4, 3e4, 1e5, 1e6] {
         let scene = room(vec3(1.0, 0.37, -0.61) * off);
         let reference = DisplayImage::from_film(&render(&scene, Options::reference()).film, 1.0);
-        let mut o = Options::hybrid();
-        o.check_visibility = true;
-        o.keep_buffers = true;
-        let hybrid = render(&scene, o);
-        let wrong_px = hybrid
-            .shadows
-            .as_ref()
-            .map_or(0, |b| (0..reference.pixels.len()).filter(|&i| b.wrong.iter().any(|w| w[i])).count());
-        let by_rays: u64 =
-            hybrid.stats.lights.iter().map(|l| l.wrong_hint.unwrap() + l.wrong_traversal.unwrap()).sum();
         let moved = differing(&at_origin, &reference);
         if off <= 1e4 {
             assert!(moved <= bound, "offset {off}: the reference differs from the origin's on {moved} px");
         }
-        if off <= 3e4 {
-            assert!(wrong_px <= bound, "offset {off}: {wrong_px} wrong pixels (bound {bound})");
+        for kind in [MapKind::Cube, MapKind::Paraboloid] {
+            let mut o = Options::hybrid();
+            o.shadow.map.kind = kind;
+            o.check_visibility = true;
+            o.keep_buffers = true;
+            let hybrid = render(&scene, o);
+            let wrong_px = hybrid
+                .shadows
+                .as_ref()
+                .map_or(0, |b| (0..reference.pixels.len()).filter(|&i| b.wrong.iter().any(|w| w[i])).count());
+            let by_rays: u64 =
+                hybrid.stats.lights.iter().map(|l| l.wrong_hint.unwrap() + l.wrong_traversal.unwrap()).sum();
+            if off <= 3e4 {
+                assert!(wrong_px <= bound, "offset {off}, {kind:?}: {wrong_px} wrong pixels (bound {bound})");
+            }
+            assert_eq!(by_rays, 0, "offset {off}, {kind:?}: border rays disagree with plain shadow rays");
         }
-        assert_eq!(by_rays, 0, "offset {off}: border rays disagree with plain shadow rays");
     }
 }
 

@@ -59,7 +59,7 @@ impl Plan {
             Visibility::Rays => "rays: one primary ray per pixel".to_string(),
             Visibility::Raster => {
                 format!(
-                    "raster: z-buffer of {tris} triangles, hit points on the visible triangle (no primary rays)"
+                    "raster: z-buffer of {tris} triangles, hit points on the visible triangle (a primary ray only where a pixel's ray leaves it)"
                 )
             }
         };

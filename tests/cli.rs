@@ -258,7 +258,8 @@ fn raster_visibility_from_the_cli() {
     assert!(ok, "{err}");
     assert!(err.contains("run   visibility  raster: z-buffer of 32 triangles"), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
-    assert_eq!(v["rays"]["primary"], 0);
+    // A primary ray only where a pixel's ray leaves its rasterized triangle (edges).
+    assert!(v["rays"]["primary"].as_u64().unwrap() * 100 < 64 * 48, "{}", v["rays"]);
     assert_eq!(v["options"]["visibility"], "raster");
     for k in ["visibility", "vis_cull", "vis_raster", "vis_resolve"] {
         assert!(v["time_ms"][k].as_f64().is_some(), "time_ms.{k} missing");
@@ -296,7 +297,8 @@ fn smerts_presets_and_knobs_from_the_cli() {
         (v["options"]["visibility"].as_str(), v["options"]["shadows"].as_str()),
         (Some("raster"), Some("smerts"))
     );
-    assert_eq!(v["rays"]["primary"], 0);
+    // A primary ray only where a pixel's ray leaves its rasterized triangle (edges).
+    assert!(v["rays"]["primary"].as_u64().unwrap() * 100 < 64 * 48, "{}", v["rays"]);
     let lights = v["shadow_lights"].as_array().unwrap();
     assert_eq!(lights.len(), 2);
     for l in lights {
@@ -411,7 +413,7 @@ fn plan_command_prints_plan_and_frame_decisions() {
     assert_eq!(frames.len(), 2);
     assert_eq!(frames[0]["maps_built"], 2);
     assert_eq!(frames[1]["maps_built"], 0);
-    assert_eq!(frames[1]["rays"]["primary"], 0);
+    assert!(frames[1]["rays"]["primary"].as_u64().unwrap() * 100 < 48 * 36, "{}", frames[1]["rays"]);
     assert!(
         frames[1]["decisions"].as_array().unwrap().iter().any(|d| d["what"] == "bvh" && d["run"] == false)
     );

@@ -239,7 +239,8 @@ fn thesis_scene(file: &str) {
     assert!(p >= 45.0, "{file}: PSNR {p:.2} dB");
     assert!(wrong_px as f64 <= 0.0005 * pixels, "{file}: {wrong_px} wrong-visibility pixels");
     assert!(ratio <= 0.08, "{file}: shadow rays {:.2} % of the reference's", 100.0 * ratio);
-    assert_eq!(f.stats.rays.primary, 0);
+    // Primary rays only where a pixel's ray leaves its rasterized triangle (edges).
+    assert!(f.stats.rays.primary as f64 <= 0.001 * pixels, "{file}: {:?}", f.stats.rays);
 }
 
 #[test]

@@ -36,8 +36,9 @@ fn agreement(scene: &Scene) -> (Agreement, Vec<Option<Hit>>, Vec<Option<Hit>>, R
     let raster = Renderer::new(scene, Options { visibility: Visibility::Raster, ..Options::default() });
     let (g_rays, st_rays) = rays.visibility();
     let (g_raster, st_raster) = raster.visibility();
-    assert_eq!(st_raster.rays.primary, 0);
     let (w, h) = (scene.settings.width as i64, scene.settings.height as i64);
+    // A primary ray only where a pixel's ray leaves its rasterized triangle.
+    assert!(st_raster.rays.primary * 1000 <= (w * h) as u64, "{:?}", st_raster.rays);
     assert_eq!(st_rays.rays.primary, (w * h) as u64);
     let mut a = Agreement { pixels: (w * h) as usize, differ: 0, edges: 0, ties: 0, unexplained: vec![] };
     let ray_at = |fx: f32, fy: f32| {
@@ -178,12 +179,12 @@ fn raster_hits_are_bit_identical_where_the_triangle_agrees() {
 }
 
 #[test]
-fn raster_visibility_casts_no_primary_rays_and_times_its_pass() {
+fn raster_visibility_casts_few_primary_rays_and_times_its_pass() {
     let mut scene = hyrt::scene::load("cornell").unwrap();
     scene.settings.width = 80;
     scene.settings.height = 60;
     let f = render(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
-    assert_eq!(f.stats.rays.primary, 0);
+    assert!(f.stats.rays.primary * 100 < 80 * 60, "{:?}", f.stats.rays);
     assert!(f.stats.time_ms.contains_key("visibility"));
     let reference = render(&scene, Options::default());
     // Same shading wherever the triangle agrees: the images are nearly identical.
@@ -224,7 +225,6 @@ fn cluster_culling_and_buffer_reuse_change_no_pixel() {
     assert!(visible.len() * 2 < r.clusters.len(), "{} of {} clusters kept", visible.len(), r.clusters.len());
 
     let (g, st) = r.visibility();
-    assert_eq!(st.rays.primary, 0, "no pixel needed a fallback ray");
     let clip: Vec<[glam::Vec4; 3]> = scene
         .positions
         .iter()
@@ -237,8 +237,21 @@ fn cluster_culling_and_buffer_reuse_change_no_pixel() {
         ..Default::default()
     };
     let all = hyrt_raster::rasterize(&clip, &ids, 640, 480, &opts);
-    let differ = g.iter().zip(&all.id).filter(|(h, i)| id(h) != **i).count();
-    assert_eq!(differ, 0, "culling changed {differ} pixels");
+    // The pass casts a ray exactly where the pixel's ray leaves the rasterized triangle (its
+    // point on the plane would be off the mesh); everywhere else it keeps the raster's id.
+    let mut leaves = 0;
+    for (i, (h, &t)) in g.iter().zip(&all.id).enumerate() {
+        let ray = r.camera_ray(i as u32 % 640, i as u32 / 640);
+        let outside = t != hyrt_raster::EMPTY_ID
+            && r.tracer.hit_on_plane(t, &ray).is_some_and(|p| p.bary.iter().any(|&b| b < 0.0));
+        if outside {
+            leaves += 1;
+        } else {
+            assert_eq!(id(h), t, "pixel {i}: culling changed the id");
+        }
+    }
+    assert_eq!(st.rays.primary, leaves, "a ray for each pixel whose ray leaves its triangle, and only those");
+    assert!(leaves * 1000 <= g.len() as u64, "{leaves} rays");
     assert!(r.visibility().0 == g, "the second frame differs");
     // Frames reuse the last G-buffer without clearing it: every pixel must be overwritten.
     r.recycle_gbuffer(vec![Some(Hit { t: 1.0, tri: 7, bary: [0.25, 0.25, 0.5] }); g.len()]);

@@ -39,7 +39,8 @@ pub enum Visibility {
     /// One primary ray through each pixel centre.
     #[default]
     Rays,
-    /// A z-buffer pass; hit points on the visible triangle's plane (no primary rays).
+    /// A z-buffer pass; hit points on the visible triangle's plane, and a primary ray only where
+    /// a pixel's ray passes outside the triangle that the z-buffer gave it (edges).
     Raster,
 }
 

@@ -51,17 +51,21 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
                 let ids = &target.id[y as usize * w as usize..][..row.len()];
                 // Each pixel's camera ray on its triangle's plane, a row at a time (SIMD);
                 // EMPTY_ID is no triangle id, so those pixels stay `None`.
-                if r.tracer.hits_on_row(&row_rays(&r.camera, y), 0, ids, row) > 0 {
-                    // Some ray runs (numerically) parallel to its triangle's plane: a sliver
-                    // seen exactly edge-on. Ask the BVH, and count the ray. (The rasterizer
-                    // writes only ids below the triangle count or EMPTY_ID, so the miss count
-                    // covers every pixel that needs a ray.)
-                    for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
-                        if px.is_none() && id != EMPTY_ID {
-                            let before = *c;
-                            *px = primary_ray(r, x as u32, y, c);
-                            r.pixel_rays.add(y as usize * w as usize + x, &before, c);
-                        }
+                let parallel = r.tracer.hits_on_row(&row_rays(&r.camera, y), 0, ids, row) > 0;
+                // Pixels that need a ray: some ray runs (numerically) parallel to its
+                // triangle's plane (a sliver seen exactly edge-on; the rasterizer writes only
+                // ids below the triangle count or EMPTY_ID, so the miss count covers these);
+                // and some ray passes just outside the triangle that the z-buffer gave its
+                // pixel (the coverage rule and the ray test differ by a fraction of a pixel
+                // along edges), where its point on the plane lies off the mesh: past a concave
+                // crease, under the neighbouring face, which would shadow it from every light.
+                // Ask the BVH, and count the ray: the G-buffer is then the ray-cast one there.
+                for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
+                    let outside = px.is_some_and(|h| h.bary.iter().any(|&b| b < 0.0));
+                    if outside || (parallel && px.is_none() && id != EMPTY_ID) {
+                        let before = *c;
+                        *px = primary_ray(r, x as u32, y, c);
+                        r.pixel_rays.add(y as usize * w as usize + x, &before, c);
                     }
                 }
             });

@@ -3,10 +3,10 @@
 use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
-use hyrt_shadowmap::border::{LIT, NONE};
+use hyrt_shadowmap::border::LIT;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
-use super::shadows::facing;
+use super::shadows::{facing, light_geometry};
 use super::{Progress, Renderer, SurfaceHit, par_rows, shade_hits, shadows::Shadowing};
 
 /// Shades every camera hit of the G-buffer with direct light. With `shadowing` (map-based
@@ -24,15 +24,15 @@ pub fn run(
             shade(r, hit, c, |_, light, s, c| shadow_ray(s, &light.position, r, c))
         }),
         // The shading points were built by the shadow passes: reuse them.
-        Some(sh) => par_rows(out, r.scene.settings.width as usize, progress, |y, row, c| {
+        Some(sh) => par_rows(out, r.scene.settings.width as usize, progress, |y, row, _| {
             let first = y as usize * row.len();
             for (x, px) in row.iter_mut().enumerate() {
                 let i = first + x;
                 if let Some(s) = &sh.bufs.surf[i] {
-                    *px = shade(r, s, c, |l, _, _, _| {
-                        let o = sh.bufs.occ[l][i];
-                        debug_assert!(o != NONE, "a facing light has a decision");
-                        o == LIT
+                    // A light has a decision exactly where the shadow passes found it facing
+                    // the point (`facing`): only the lit ones need their geometry.
+                    *px = reflect(r, s, |l, light| {
+                        (sh.bufs.occ[l][i] == LIT).then(|| light_geometry(s, light)).flatten()
                     });
                 }
             }
@@ -62,6 +62,21 @@ pub fn shade(
     counts: &mut RayCounts,
     mut visible: impl FnMut(usize, &crate::scene::PointLight, &SurfaceHit, &mut RayCounts) -> bool,
 ) -> Vec3 {
+    let tri = &r.scene.positions[hit.tri as usize];
+    reflect(r, hit, |l, light| {
+        let g = facing(hit, light, tri)?;
+        visible(l, light, hit, counts).then_some(g)
+    })
+}
+
+/// The sum of [`shade`] over the lights for which `lit(l, light)` gives their geometry
+/// `(wi, cos, d2)` (those in front of the surface and visible); the one place where the
+/// material's reflection of point lights is evaluated, for the reference and the hybrid alike.
+fn reflect(
+    r: &Renderer,
+    hit: &SurfaceHit,
+    mut lit: impl FnMut(usize, &crate::scene::PointLight) -> Option<(Vec3, f32, f32)>,
+) -> Vec3 {
     let m = &r.scene.materials[r.scene.material[hit.tri as usize] as usize];
     if !m.is_lit() {
         return Vec3::ZERO;
@@ -69,15 +84,12 @@ pub fn shade(
     let highlight = m.has_highlight();
     // Irradiance at normal incidence times cos(theta), summed; and weighted by the lobe.
     let (mut sum, mut lobe_sum) = (Vec3::ZERO, Vec3::ZERO);
-    let tri = &r.scene.positions[hit.tri as usize];
     for (l, light) in r.scene.lights.iter().enumerate() {
-        let Some((wi, cos, d2)) = facing(hit, light, tri) else { continue };
-        if visible(l, light, hit, counts) {
-            let e = light.intensity * (cos / d2);
-            sum += e;
-            if highlight {
-                lobe_sum += e * m.highlight_lobe(hit.ns, wi, hit.wo);
-            }
+        let Some((wi, cos, d2)) = lit(l, light) else { continue };
+        let e = light.intensity * (cos / d2);
+        sum += e;
+        if highlight {
+            lobe_sum += e * m.highlight_lobe(hit.ns, wi, hit.wo);
         }
     }
     let diffuse = m.diffuse * FRAC_1_PI * sum;

@@ -42,6 +42,23 @@ use crate::{plan::FrameDecision, scene::PointLight};
 /// in the plane therefore lights none of it, in the reference and the hybrid alike.
 #[inline]
 pub fn facing(hit: &SurfaceHit, light: &PointLight, tri: &[Vec3; 3]) -> Option<(Vec3, f32, f32)> {
+    let (wi, cos, d2) = light_geometry(hit, light)?;
+    // `hit.ng` is the winding's normal, flipped towards the viewer: the light must be on the
+    // viewer's side.
+    let winding = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    let front = match plane_side(tri, light.position) {
+        PlaneSide::In => return None,
+        PlaneSide::Front => hit.ng.dot(winding) > 0.0,
+        PlaneSide::Back => hit.ng.dot(winding) < 0.0,
+    };
+    front.then_some((wi, cos, d2))
+}
+
+/// The part of [`facing`] that does not ask the side of the plane: `Some((wi, cos, d2))` for
+/// a light with some intensity, not at the point, in front of the shading normal. Passes that
+/// already know that the light faces the point (a map decision was made for it) use this alone.
+#[inline]
+pub fn light_geometry(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32, f32)> {
     // A dark light adds nothing: no ray, no map (the plan says so).
     if light.intensity.max_element() <= 0.0 {
         return None;
@@ -53,18 +70,7 @@ pub fn facing(hit: &SurfaceHit, light: &PointLight, tri: &[Vec3; 3]) -> Option<(
     }
     let wi = to_light / d2.sqrt();
     let cos = hit.ns.dot(wi);
-    if cos <= 0.0 {
-        return None;
-    }
-    // `hit.ng` is the winding's normal, flipped towards the viewer: the light must be on the
-    // viewer's side.
-    let winding = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-    let front = match plane_side(tri, light.position) {
-        PlaneSide::In => return None,
-        PlaneSide::Front => hit.ng.dot(winding) > 0.0,
-        PlaneSide::Back => hit.ng.dot(winding) < 0.0,
-    };
-    front.then_some((wi, cos, d2))
+    (cos > 0.0).then_some((wi, cos, d2))
 }
 
 /// Per-renderer state of map-based shadows: the light maps (and the triangle planes their

@@ -450,6 +450,17 @@ fn bench_writes_the_thesis_tables() {
     assert_eq!(configs.len(), 7);
     // Map-based shadows have a wrong-visibility count; the reference has none.
     assert!(configs.iter().any(|c| c["label"] == "smerts-cube" && c["wrong_pixels"].is_u64()));
+    // The time per pass: a row per configuration, each cell the JSON's median.
+    let table: Vec<&str> = md.split("### Time per pass").nth(1).expect("per-pass table").lines().collect();
+    let header: Vec<&str> = table.iter().find(|l| l.starts_with("| scene")).unwrap().split(" | ").collect();
+    let rows: Vec<&&str> = table.iter().filter(|l| l.starts_with("| cornell")).collect();
+    assert_eq!(rows.len(), 7);
+    let smerts: Vec<&str> = rows.iter().find(|l| l.contains("`smerts-cube`")).unwrap().split(" | ").collect();
+    let c = configs.iter().find(|c| c["label"] == "smerts-cube").unwrap();
+    for pass in ["classify", "surface", "shadow_rays", "direct"] {
+        let k = header.iter().position(|h| h.trim() == pass).unwrap_or_else(|| panic!("{pass}: {header:?}"));
+        assert_eq!(smerts[k].trim(), format!("{:.1}", c["pass_ms"][pass].as_f64().unwrap()), "{pass}");
+    }
     assert!(configs.iter().any(|c| c["label"] == "rt" && c["wrong_pixels"].is_null()));
 
     let (ok, _, err) = common::hyrt(&["bench", "missing-scene.toml", "--out", out]);

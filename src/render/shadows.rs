@@ -42,16 +42,22 @@ use crate::{plan::FrameDecision, scene::PointLight};
 /// in the plane therefore lights none of it, in the reference and the hybrid alike.
 #[inline]
 pub fn facing(hit: &SurfaceHit, light: &PointLight, tri: &[Vec3; 3]) -> Option<(Vec3, f32, f32)> {
-    let (wi, cos, d2) = light_geometry(hit, light)?;
-    // `hit.ng` is the winding's normal, flipped towards the viewer: the light must be on the
-    // viewer's side.
+    let g = light_geometry(hit, light)?;
+    viewer_side(hit, tri, plane_side(tri, light.position)).then_some(g)
+}
+
+/// Whether a light on side `side` of `tri`'s plane ([`plane_side`], which depends on the
+/// triangle and the light only, so that callers may reuse it across the pixels of a triangle)
+/// is on the side `hit` is seen from: `hit.ng` is the winding's normal flipped towards the
+/// viewer.
+#[inline]
+pub fn viewer_side(hit: &SurfaceHit, tri: &[Vec3; 3], side: PlaneSide) -> bool {
     let winding = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-    let front = match plane_side(tri, light.position) {
-        PlaneSide::In => return None,
+    match side {
+        PlaneSide::In => false,
         PlaneSide::Front => hit.ng.dot(winding) > 0.0,
         PlaneSide::Back => hit.ng.dot(winding) < 0.0,
-    };
-    front.then_some((wi, cos, d2))
+    }
 }
 
 /// The part of [`facing`] that does not ask the side of the plane: `Some((wi, cos, d2))` for
@@ -291,6 +297,9 @@ impl Renderer<'_> {
             |(y, ((surf, points), faces))| {
                 let hits = &gbuffer[y * w..][..surf.len()];
                 let pixels = surf.iter_mut().zip(points.iter_mut()).zip(faces.chunks_mut(stride));
+                // The side of each light relative to the last triangle's plane: a row crosses
+                // runs of pixels on one triangle, and the exact test is per triangle and light.
+                let mut sides: (u32, Vec<PlaneSide>) = (EMPTY, Vec::with_capacity(lights.len()));
                 for (x, (((s, pt), bits), hit)) in pixels.zip(hits).enumerate() {
                     *s = hit
                         .as_ref()
@@ -299,8 +308,15 @@ impl Renderer<'_> {
                     *pt = s.as_ref().map_or((Vec3::ZERO, EMPTY), |s| (s.p, s.tri));
                     bits.fill(0);
                     let Some(s) = s else { continue };
+                    let tri = &self.scene.positions[s.tri as usize];
+                    if sides.0 != s.tri {
+                        sides.0 = s.tri;
+                        sides.1.clear();
+                        sides.1.extend(lights.iter().map(|light| plane_side(tri, light.position)));
+                    }
                     for (l, light) in lights.iter().enumerate() {
-                        if facing(s, light, &self.scene.positions[s.tri as usize]).is_some() {
+                        // `facing`, with the plane side reused.
+                        if light_geometry(s, light).is_some() && viewer_side(s, tri, sides.1[l]) {
                             bits[l / 8] |= 1 << (l % 8);
                         }
                     }

@@ -4,10 +4,10 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 use hyrt_shadowmap::border::LIT;
-use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
+use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 
-use super::shadows::{facing, light_geometry};
-use super::{Progress, Renderer, SurfaceHit, par_rows, shade_hits, shadows::Shadowing};
+use super::shadows::{facing, light_geometry, viewer_side};
+use super::{Progress, Renderer, SurfaceHit, par_rows, shadows::Shadowing};
 
 /// Shades every camera hit of the G-buffer with direct light. With `shadowing` (map-based
 /// shadows), the visibility of each light is read from its final occlusion map (no rays here:
@@ -20,9 +20,33 @@ pub fn run(
     progress: Progress,
 ) -> RayCounts {
     match shadowing {
-        None => shade_hits(r, gbuffer, out, progress, |_, hit, c| {
-            shade(r, hit, c, |_, light, s, c| shadow_ray(s, &light.position, r, c))
-        }),
+        None => {
+            // `shade` with shadow rays, the plane side of each light kept for the row's last
+            // triangle (`facing` asks it per pixel; it depends on the triangle and light only).
+            let w = r.scene.settings.width as usize;
+            par_rows(out, w, progress, |y, row, c| {
+                let first = y as usize * w;
+                let mut sides: (u32, Vec<PlaneSide>) = (u32::MAX, Vec::with_capacity(r.scene.lights.len()));
+                let hits = &gbuffer[first..][..row.len()];
+                for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
+                    let Some(hit) = hit else { continue };
+                    let s = SurfaceHit::new(r.scene, hit, r.camera_ray(x as u32, y).dir);
+                    let tri = &r.scene.positions[s.tri as usize];
+                    let before = *c;
+                    *px = reflect(r, &s, |l, light| {
+                        if sides.0 != s.tri {
+                            sides.0 = s.tri;
+                            sides.1.clear();
+                            sides.1.extend(r.scene.lights.iter().map(|li| plane_side(tri, li.position)));
+                        }
+                        let g = light_geometry(&s, light)?;
+                        (viewer_side(&s, tri, sides.1[l]) && shadow_ray(&s, &light.position, r, c))
+                            .then_some(g)
+                    });
+                    r.pixel_rays.add(first + x, &before, c);
+                }
+            })
+        }
         // The shading points were built by the shadow passes: reuse them.
         Some(sh) => par_rows(out, r.scene.settings.width as usize, progress, |y, row, _| {
             let first = y as usize * row.len();

@@ -93,7 +93,7 @@ pub struct ShadowOptions {
 
 impl Default for ShadowOptions {
     /// The hybrid defaults, chosen by measurement on the three thesis scenes at 640x480 (see
-    /// the README's SMeRTS section): cube maps of 2048x2048 per face, bias 1 texel footprint,
+    /// docs/results.md, SMeRTS): cube maps of 2048x2048 per face, bias 1 texel footprint,
     /// map-space borders without dilation.
     fn default() -> Self {
         Self {

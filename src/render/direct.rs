@@ -4,9 +4,9 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 use hyrt_shadowmap::border::LIT;
-use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
+use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
-use super::shadows::{facing, light_geometry, viewer_side};
+use super::shadows::{PlaneSides, facing, light_geometry, viewer_side};
 use super::{Progress, Renderer, SurfaceHit, par_rows, shadows::Shadowing};
 
 /// Shades every camera hit of the G-buffer with direct light. With `shadowing` (map-based
@@ -26,22 +26,17 @@ pub fn run(
             let w = r.scene.settings.width as usize;
             par_rows(out, w, progress, |y, row, c| {
                 let first = y as usize * w;
-                let mut sides: (u32, Vec<PlaneSide>) = (u32::MAX, Vec::with_capacity(r.scene.lights.len()));
+                let mut sides = PlaneSides::new();
                 let hits = &gbuffer[first..][..row.len()];
                 for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
                     let Some(hit) = hit else { continue };
                     let s = SurfaceHit::new(r.scene, hit, r.camera_ray(x as u32, y).dir);
                     let tri = &r.scene.positions[s.tri as usize];
                     let before = *c;
+                    let sides = sides.of(s.tri, tri, &r.scene.lights);
                     *px = reflect(r, &s, |l, light| {
-                        if sides.0 != s.tri {
-                            sides.0 = s.tri;
-                            sides.1.clear();
-                            sides.1.extend(r.scene.lights.iter().map(|li| plane_side(tri, li.position)));
-                        }
                         let g = light_geometry(&s, light)?;
-                        (viewer_side(&s, tri, sides.1[l]) && shadow_ray(&s, &light.position, r, c))
-                            .then_some(g)
+                        (viewer_side(&s, tri, sides[l]) && shadow_ray(&s, &light.position, r, c)).then_some(g)
                     });
                     r.pixel_rays.add(first + x, &before, c);
                 }

@@ -12,7 +12,7 @@ use std::time::Instant;
 use glam::Vec3;
 use hyrt_shadowmap::{
     LightMap, MapOptions,
-    classify::{Classifier, Plane, triangle_planes},
+    classify::{Classifier, Plane},
 };
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
@@ -87,7 +87,6 @@ impl Default for IndirectOptions {
 pub(crate) struct VplCache {
     vpls: OnceLock<(Vec<vpl::Vpl>, RayCounts)>,
     maps: OnceLock<Vec<LightMap>>,
-    planes: OnceLock<Vec<Plane>>,
 }
 
 impl Renderer<'_> {
@@ -170,7 +169,7 @@ impl Renderer<'_> {
         }
         stats.vpls = vpls.len() as u32;
         stats.vpl_map_bytes = maps.iter().map(|m| m.memory_bytes() as u64).sum();
-        let planes = self.vpl_cache.planes.get_or_init(|| triangle_planes(&self.scene.positions));
+        let planes = self.occluders().0;
         let diag = self.bounds.map_or(1.0, |(lo, hi)| (hi - lo).length());
         let clamp = opts.clamp.max(0.0) * diag;
         Vpls { vpls, maps, planes, clamp2: clamp * clamp }
@@ -228,7 +227,7 @@ impl Vpls<'_> {
                         map,
                         planes: self.planes,
                         bias: r.options.indirect_opts.bias,
-                        point_error: r.point_error,
+                        point_error: r.occluders().1,
                     };
                     visibility(&cls, r.options.indirect_opts.filter, s.p, s.tri, cls.locate(s.p))
                 }
@@ -319,7 +318,7 @@ pub fn run(
             } else {
                 let mut located = Vec::with_capacity(irr.len());
                 for (vi, (vpl, map)) in v.vpls.iter().zip(v.maps).enumerate() {
-                    let cls = Classifier { map, planes: v.planes, bias, point_error: r.point_error };
+                    let cls = Classifier { map, planes: v.planes, bias, point_error: r.occluders().1 };
                     located.clear();
                     // The band's pixels of this VPL's subset: every k-th column of every k-th
                     // row (all of them without interleaving).

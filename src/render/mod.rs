@@ -244,9 +244,10 @@ pub struct Renderer<'a> {
     gbuffer: std::sync::Mutex<Vec<Option<Hit>>>,
     /// The scene's bounding box (`Scene::bounds` walks every vertex: once per scene).
     pub(crate) bounds: Option<(Vec3, Vec3)>,
-    /// The rounding error of a shading point, per axis, for map classification
+    /// What map classification needs of the scene, made on first use and shared by the light
+    /// maps and the VPL maps: every triangle's plane, and the rounding error of a shading point
     /// ([`hyrt_shadowmap::classify::point_error_bound`]).
-    pub point_error: f32,
+    occluders: std::sync::OnceLock<(Vec<hyrt_shadowmap::classify::Plane>, f32)>,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -280,8 +281,18 @@ impl<'a> Renderer<'a> {
             pixel_rays,
             gbuffer: Default::default(),
             bounds: scene.bounds(),
-            point_error: hyrt_shadowmap::classify::point_error_bound(&scene.positions),
+            occluders: Default::default(),
         }
+    }
+
+    /// The planes of the scene's triangles and the rounding error of a shading point, for
+    /// [`hyrt_shadowmap::classify::Classifier`] (made on the first call).
+    pub fn occluders(&self) -> (&[hyrt_shadowmap::classify::Plane], f32) {
+        let (planes, e) = self.occluders.get_or_init(|| {
+            use hyrt_shadowmap::classify::{point_error_bound, triangle_planes};
+            (triangle_planes(&self.scene.positions), point_error_bound(&self.scene.positions))
+        });
+        (planes, *e)
     }
 
     /// Changes the strategies and knobs of the next frames, keeping every cache the change

@@ -22,7 +22,7 @@ use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap,
     border::{LIT, NONE, SHADOW, dilate, laplacian_border},
-    classify::{Classifier, Plane, triangle_planes},
+    classify::{Classifier, Plane},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
@@ -60,6 +60,31 @@ pub fn viewer_side(hit: &SurfaceHit, tri: &[Vec3; 3], side: PlaneSide) -> bool {
     }
 }
 
+/// [`plane_side`] of every light for the last triangle asked: a pass over a row of pixels
+/// crosses runs of pixels on one triangle, and the exact test depends on the triangle and the
+/// light only.
+pub(crate) struct PlaneSides {
+    tri: u32,
+    sides: Vec<PlaneSide>,
+}
+
+impl PlaneSides {
+    pub(crate) fn new() -> Self {
+        Self { tri: u32::MAX, sides: Vec::new() }
+    }
+
+    /// The side of each of `lights` relative to triangle `id`'s plane (corners `tri`).
+    #[inline]
+    pub(crate) fn of(&mut self, id: u32, tri: &[Vec3; 3], lights: &[PointLight]) -> &[PlaneSide] {
+        if self.tri != id {
+            self.tri = id;
+            self.sides.clear();
+            self.sides.extend(lights.iter().map(|l| plane_side(tri, l.position)));
+        }
+        &self.sides
+    }
+}
+
 /// The part of [`facing`] that does not ask the side of the plane: `Some((wi, cos, d2))` for
 /// a light with some intensity, not at the point, in front of the shading normal. Passes that
 /// already know that the light faces the point (a map decision was made for it) use this alone.
@@ -79,12 +104,11 @@ pub fn light_geometry(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32
     (cos > 0.0).then_some((wi, cos, d2))
 }
 
-/// Per-renderer state of map-based shadows: the light maps (and the triangle planes their
-/// classification needs), and the per-pixel buffers, recycled from frame to frame.
+/// Per-renderer state of map-based shadows: the light maps and the per-pixel buffers, recycled
+/// from frame to frame.
 #[derive(Default)]
 pub(crate) struct MapCache {
     maps: Mutex<Vec<Option<Arc<LightMap>>>>,
-    planes: std::sync::OnceLock<Vec<Plane>>,
     /// Per light and face, whether a camera hit falls on it: a renderer's scene and camera are
     /// fixed, so this is computed on the first frame only.
     needed: std::sync::OnceLock<Vec<bool>>,
@@ -186,10 +210,6 @@ impl Renderer<'_> {
     /// shadow ray either.
     pub(crate) fn needs_light(&self, tri: u32) -> bool {
         self.scene.materials[self.scene.material[tri as usize] as usize].is_lit()
-    }
-
-    fn planes(&self) -> &[Plane] {
-        self.maps.planes.get_or_init(|| triangle_planes(&self.scene.positions))
     }
 
     /// The light maps covering every face that a camera hit of `gbuffer` falls on, built (or
@@ -297,9 +317,7 @@ impl Renderer<'_> {
             |(y, ((surf, points), faces))| {
                 let hits = &gbuffer[y * w..][..surf.len()];
                 let pixels = surf.iter_mut().zip(points.iter_mut()).zip(faces.chunks_mut(stride));
-                // The side of each light relative to the last triangle's plane: a row crosses
-                // runs of pixels on one triangle, and the exact test is per triangle and light.
-                let mut sides: (u32, Vec<PlaneSide>) = (EMPTY, Vec::with_capacity(lights.len()));
+                let mut sides = PlaneSides::new();
                 for (x, (((s, pt), bits), hit)) in pixels.zip(hits).enumerate() {
                     *s = hit
                         .as_ref()
@@ -309,14 +327,10 @@ impl Renderer<'_> {
                     bits.fill(0);
                     let Some(s) = s else { continue };
                     let tri = &self.scene.positions[s.tri as usize];
-                    if sides.0 != s.tri {
-                        sides.0 = s.tri;
-                        sides.1.clear();
-                        sides.1.extend(lights.iter().map(|light| plane_side(tri, light.position)));
-                    }
+                    let sides = sides.of(s.tri, tri, lights);
                     for (l, light) in lights.iter().enumerate() {
                         // `facing`, with the plane side reused.
-                        if light_geometry(s, light).is_some() && viewer_side(s, tri, sides.1[l]) {
+                        if light_geometry(s, light).is_some() && viewer_side(s, tri, sides[l]) {
                             bits[l / 8] |= 1 << (l % 8);
                         }
                     }
@@ -332,8 +346,7 @@ impl Renderer<'_> {
         stats.decisions.extend(decisions);
 
         let t = Instant::now();
-        let planes: &'r [Plane] = self.planes();
-        let point_error = self.point_error;
+        let (planes, point_error): (&'r [Plane], f32) = self.occluders();
         let bias = self.options.shadow.bias;
         reset(&mut bufs.occ, nl, n, NONE);
         reset(&mut bufs.hint, nl, n, EMPTY);
@@ -604,8 +617,12 @@ impl Shadowing<'_> {
         if !map.faces_drawn()[face] {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);
         }
-        let cls =
-            Classifier { map, planes: self.planes, bias: r.options.shadow.bias, point_error: r.point_error };
+        let cls = Classifier {
+            map,
+            planes: self.planes,
+            bias: r.options.shadow.bias,
+            point_error: r.occluders().1,
+        };
         let lk = cls.classify(s.p, s.tri);
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);

@@ -107,7 +107,10 @@ impl Plan {
                     plan.add(
                         true,
                         "classify",
-                        format!("per light: occlusion map (bias {} texel footprints)", sh.bias),
+                        format!(
+                            "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions",
+                            sh.bias
+                        ),
                     );
                     if opts.shadows == Shadows::Smerts {
                         plan.add(
@@ -118,15 +121,15 @@ impl Plan {
                         plan.add(
                             true,
                             "shadow_rays",
-                            "one shadow ray per border pixel and light, occluder hint first".into(),
+                            "one shadow ray per border pixel and light, occluder hint first; those pixels shaded again".into(),
                         );
                     } else {
                         plan.add(false, "borders", "shadows by maps alone: no borders, no rays".into());
                     }
                     plan.add(
-                        true,
+                        false,
                         "direct",
-                        format!("{lights} point light(s), {highlights}, visibility from the occlusion maps"),
+                        "shaded by classify (and shadow_rays on borders), no pass of its own".into(),
                     );
                 }
             }

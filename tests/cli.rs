@@ -305,7 +305,7 @@ fn smerts_presets_and_knobs_from_the_cli() {
         assert!(l["lit"].as_u64().unwrap() > 0 && l["wrong"].as_u64().is_some(), "{l}");
     }
     assert_eq!(v["maps_built"], 2);
-    for k in ["surface", "map_build", "classify", "borders", "shadow_rays", "direct"] {
+    for k in ["map_build", "classify", "borders", "shadow_rays"] {
         assert!(v["time_ms"][k].as_f64().is_some(), "time_ms.{k} missing");
     }
     let r = &v["rays"];
@@ -457,7 +457,7 @@ fn bench_writes_the_thesis_tables() {
     assert_eq!(rows.len(), 7);
     let smerts: Vec<&str> = rows.iter().find(|l| l.contains("`smerts-cube`")).unwrap().split(" | ").collect();
     let c = configs.iter().find(|c| c["label"] == "smerts-cube").unwrap();
-    for pass in ["classify", "surface", "shadow_rays", "direct"] {
+    for pass in ["classify", "borders", "shadow_rays"] {
         let k = header.iter().position(|h| h.trim() == pass).unwrap_or_else(|| panic!("{pass}: {header:?}"));
         assert_eq!(smerts[k].trim(), format!("{:.1}", c["pass_ms"][pass].as_f64().unwrap()), "{pass}");
     }

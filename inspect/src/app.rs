@@ -1136,12 +1136,11 @@ const RAY_ROWS: [RayRow; 8] = [
 
 /// Passes in pipeline order (then any others, then `total`).
 fn pass_order<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
-    const ORDER: [&str; 15] = [
+    const ORDER: [&str; 14] = [
         "visibility",
         "vis_cull",
         "vis_raster",
         "vis_resolve",
-        "surface",
         "map_build",
         "classify",
         "borders",

@@ -3,60 +3,34 @@
 use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
-use hyrt_shadowmap::border::LIT;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
 use super::shadows::{PlaneSides, facing, light_geometry, viewer_side};
 use super::{Progress, Renderer, SurfaceHit, par_rows, shadows::Shadowing};
 
-/// Shades every camera hit of the G-buffer with direct light. With `shadowing` (map-based
-/// shadows), the visibility of each light is read from its final occlusion map (no rays here:
-/// the border rays were cast by `Shadowing::trace`); without it, one shadow ray per light.
-pub fn run(
-    r: &Renderer,
-    gbuffer: &[Option<Hit>],
-    shadowing: Option<&Shadowing>,
-    out: &mut [Vec3],
-    progress: Progress,
-) -> RayCounts {
-    match shadowing {
-        None => {
-            // `shade` with shadow rays, the plane side of each light kept for the row's last
-            // triangle (`facing` asks it per pixel; it depends on the triangle and light only).
-            let w = r.scene.settings.width as usize;
-            par_rows(out, w, progress, |y, row, c| {
-                let first = y as usize * w;
-                let mut sides = PlaneSides::new();
-                let hits = &gbuffer[first..][..row.len()];
-                for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
-                    let Some(hit) = hit else { continue };
-                    let s = SurfaceHit::new(r.scene, hit, r.camera_ray(x as u32, y).dir);
-                    let tri = &r.scene.positions[s.tri as usize];
-                    let before = *c;
-                    let sides = sides.of(s.tri, tri, &r.scene.lights);
-                    *px = reflect(r, &s, |l, light| {
-                        let g = light_geometry(&s, light)?;
-                        (viewer_side(&s, tri, sides[l]) && shadow_ray(&s, &light.position, r, c)).then_some(g)
-                    });
-                    r.pixel_rays.add(first + x, &before, c);
-                }
-            })
+/// Shades every camera hit of the G-buffer with direct light, one shadow ray per light (the
+/// reference; map-based shadows shade in their classify pass, `shadows`).
+pub fn run(r: &Renderer, gbuffer: &[Option<Hit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
+    // `shade` with shadow rays, the plane side of each light kept for the row's last
+    // triangle (`facing` asks it per pixel; it depends on the triangle and light only).
+    let w = r.scene.settings.width as usize;
+    par_rows(out, w, progress, |y, row, c| {
+        let first = y as usize * w;
+        let mut sides = PlaneSides::new();
+        let hits = &gbuffer[first..][..row.len()];
+        for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
+            let Some(hit) = hit else { continue };
+            let s = SurfaceHit::new(r.scene, hit, r.camera_ray(x as u32, y).dir);
+            let tri = &r.scene.positions[s.tri as usize];
+            let before = *c;
+            let sides = sides.of(s.tri, tri, &r.scene.lights);
+            *px = reflect(r, &s, |l, light| {
+                let g = light_geometry(&s, light)?;
+                (viewer_side(&s, tri, sides[l]) && shadow_ray(&s, &light.position, r, c)).then_some(g)
+            });
+            r.pixel_rays.add(first + x, &before, c);
         }
-        // The shading points were built by the shadow passes: reuse them.
-        Some(sh) => par_rows(out, r.scene.settings.width as usize, progress, |y, row, _| {
-            let first = y as usize * row.len();
-            for (x, px) in row.iter_mut().enumerate() {
-                let i = first + x;
-                if let Some(s) = &sh.bufs.surf[i] {
-                    // A light has a decision exactly where the shadow passes found it facing
-                    // the point (`facing`): only the lit ones need their geometry.
-                    *px = reflect(r, s, |l, light| {
-                        (sh.bufs.occ[l][i] == LIT).then(|| light_geometry(s, light)).flatten()
-                    });
-                }
-            }
-        }),
-    }
+    })
 }
 
 /// Whether a shadow ray from `s` reaches `light` (the reference's test).
@@ -91,7 +65,7 @@ pub fn shade(
 /// The sum of [`shade`] over the lights for which `lit(l, light)` gives their geometry
 /// `(wi, cos, d2)` (those in front of the surface and visible); the one place where the
 /// material's reflection of point lights is evaluated, for the reference and the hybrid alike.
-fn reflect(
+pub(crate) fn reflect(
     r: &Renderer,
     hit: &SurfaceHit,
     mut lit: impl FnMut(usize, &crate::scene::PointLight) -> Option<(Vec3, f32, f32)>,

@@ -5,7 +5,8 @@
 //! ```text
 //! visibility  -> gbuffer: Vec<Option<Hit>>             (Visibility::Rays: primary rays,
 //!                                                       Visibility::Raster: z-buffer)
-//! direct      -> direct:  Vec<Vec3>                    (Shadows::Rays: one shadow ray per light)
+//! direct      -> direct:  Vec<Vec3>                    (Shadows::Rays: one shadow ray per light;
+//!                                                       map-based shadows: `shadows`' passes)
 //! specular    -> specular: Vec<Vec3>                   (mirror paths, their hits shaded as above)
 //! compose     -> Film = direct + specular
 //! ```
@@ -335,7 +336,10 @@ impl<'a> Renderer<'a> {
 
     /// Number of pixel passes that report progress (rows each).
     pub fn progress_passes(&self) -> u32 {
-        ["visibility", "direct", "indirect", "specular"].iter().filter(|p| self.plan.runs(p)).count() as u32
+        ["visibility", "classify", "direct", "indirect", "specular"]
+            .iter()
+            .filter(|p| self.plan.runs(p))
+            .count() as u32
     }
 
     /// The camera ray through the centre of pixel `(x, y)`.
@@ -394,18 +398,19 @@ impl<'a> Renderer<'a> {
 
         let mut direct = vec![Vec3::ZERO; n];
         let mut shadowing = None;
-        if self.plan.runs("direct") {
+        if self.plan.runs("direct") || self.plan.runs("classify") {
             if self.options.shadows != Shadows::Rays {
-                let mut s = self.shadowing(&gbuffer, &mut stats);
+                let mut s = self.shadowing(&gbuffer, &mut direct, progress, &mut stats);
                 let t = Instant::now();
-                stats.rays += s.trace(self, self.options.check_visibility);
+                stats.rays += s.trace(self, &gbuffer, &mut direct, self.options.check_visibility);
                 stats.time_ms.insert("shadow_rays", ms(t));
                 stats.lights = s.lights.clone();
                 shadowing = Some(s);
+            } else {
+                let t = Instant::now();
+                stats.rays += direct::run(self, &gbuffer, &mut direct, progress);
+                stats.time_ms.insert("direct", ms(t));
             }
-            let t = Instant::now();
-            stats.rays += direct::run(self, &gbuffer, shadowing.as_ref(), &mut direct, progress);
-            stats.time_ms.insert("direct", ms(t));
         }
 
         let mut indirect = vec![Vec3::ZERO; n];

@@ -1,15 +1,23 @@
 //! Point-light visibility from depth maps: SMeRTS (shadow maps + selective ray tracing).
 //!
-//! Per frame, for the camera hits of the G-buffer, as a sequence of passes over named buffers:
+//! Per frame, for the camera hits of the G-buffer, as a sequence of passes over named buffers;
+//! the per-pixel buffers hold one bit per light (`LightBits`), not a screen per light:
 //!
 //! ```text
 //! map_build    light maps: only faces some camera hit falls on; cached until the scene changes
-//! classify     per light: occlusion map  occ[l]: LIT | SHADOW | NONE (light behind the surface),
-//!              hint[l]: occluder triangle, map_border[l]: the 2x2 texel footprint disagrees
-//! borders      per light (Smerts): undecided[l] = dilate(laplacian(occ[l]) | map_border[l], R)
-//! shadow_rays  per undecided (pixel, light): a shadow ray, hint first, its answer into occ[l]
-//! direct       shading with occ (no rays)
+//! classify     8x8 tile by tile: the shading points, then per light each point's location (its
+//!              texels prefetched for the whole tile) and map decision -> faces, lit, edge (the
+//!              2x2 texel footprint disagrees); then the tile's direct light from those decisions
+//! borders      (Smerts) und = dilate(edge and/or laplacian(lit, faces), R), byte ops over 8 lights
+//! shadow_rays  per pixel with und bits: a shadow ray per undecided light (hint first, the hint
+//!              looked up again), its answer into lit, and the pixel's direct light again
 //! ```
+//!
+//! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points
+//! in L1 while every light decides them; the alternative, a screen-sized buffer per light and a
+//! pass per buffer, spent its time writing and reading those buffers. The occluder hint is not
+//! stored: only border pairs need it, and looking it up again costs less than a `u32` per pixel
+//! and light.
 //!
 //! With `Shadows::Maps` the map's decision is final (no borders, no rays): the pure shadow-map
 //! baseline. Mirror hits have no screen neighbours: they use the map-space test alone
@@ -21,7 +29,7 @@ use std::time::Instant;
 use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap,
-    border::{LIT, NONE, SHADOW, dilate, laplacian_border},
+    border::{LIT, NONE, SHADOW},
     classify::{Classifier, Plane},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
@@ -112,8 +120,7 @@ pub(crate) struct MapCache {
     /// Per light and face, whether a camera hit falls on it: a renderer's scene and camera are
     /// fixed, so this is computed on the first frame only.
     needed: std::sync::OnceLock<Vec<bool>>,
-    /// Buffers of the last frame, reused (allocating ~10 bytes per pixel and light afresh cost
-    /// a fifth of the frame in page faults).
+    /// Buffers of the last frame, reused (allocating them afresh costs page faults).
     scratch: Mutex<ShadowBuffers>,
 }
 
@@ -147,8 +154,50 @@ impl LightStats {
     }
 }
 
-/// The per-pixel buffers of a frame's map-based shadows, one vector per light, row-major. Kept
-/// in the [`super::Frame`] with `Options::keep_buffers` (for inspection).
+/// One bit per light for every pixel: bit `l % 8` of byte `l / 8` of the pixel's `stride`
+/// bytes, pixel-major, so that one pass over the pixels serves every light, and the screen
+/// passes over them (borders, dilation) treat eight lights per byte operation.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LightBits {
+    pub(crate) stride: usize,
+    pub(crate) bits: Vec<u8>,
+}
+
+impl LightBits {
+    /// Resizes to `n` pixels of `lights` bits, all clear.
+    fn reset(&mut self, n: usize, lights: usize) {
+        self.stride = lights.div_ceil(8).max(1);
+        self.bits.clear();
+        self.bits.resize(n * self.stride, 0);
+    }
+
+    #[inline]
+    pub(crate) fn get(&self, i: usize, l: usize) -> bool {
+        self.bits[i * self.stride + l / 8] >> (l % 8) & 1 != 0
+    }
+
+    /// Pixel `i`'s bytes.
+    #[inline]
+    fn pixel(&self, i: usize) -> &[u8] {
+        &self.bits[i * self.stride..][..self.stride]
+    }
+
+    /// Whether any bit of pixel `i` is set.
+    #[inline]
+    fn any(&self, i: usize) -> bool {
+        self.pixel(i).iter().any(|&b| b != 0)
+    }
+}
+
+/// The bit of light `l` in a pixel's bytes.
+#[inline]
+fn bit(bytes: &[u8], l: usize) -> bool {
+    bytes[l / 8] >> (l % 8) & 1 != 0
+}
+
+/// The per-pixel buffers of a frame's map-based shadows. The public per-light vectors are
+/// filled only with `Options::keep_buffers` (for inspection), from the compact per-pixel bits
+/// the passes work on; they are then kept in the [`super::Frame`].
 #[derive(Clone, Debug, Default)]
 pub struct ShadowBuffers {
     /// The decision: [`LIT`], [`SHADOW`] or [`NONE`] (no decision needed: no hit, the light
@@ -164,20 +213,23 @@ pub struct ShadowBuffers {
     /// With `check_visibility`: the decisions a plain shadow ray contradicts, whoever made
     /// them: the map, or a border ray answered by its hint or by a traversal (else empty).
     pub wrong: Vec<Vec<bool>>,
-    /// With `Options::keep_buffers` (else empty): the border before dilation (pixels with a
-    /// decision only), and what each undecided pixel's shadow ray did: [`RAY_NONE`],
-    /// [`RAY_HINT`] (its occluder hint blocked it: no traversal) or [`RAY_TRAVERSAL`].
+    /// The border before dilation (pixels with a decision only), and what each undecided
+    /// pixel's shadow ray did: [`RAY_NONE`], [`RAY_HINT`] (its occluder hint blocked it: no
+    /// traversal) or [`RAY_TRAVERSAL`].
     pub border: Vec<Vec<bool>>,
     pub ray: Vec<Vec<u8>>,
-    /// The shading points of the camera hits.
-    pub(crate) surf: Vec<Option<SurfaceHit>>,
-    /// Per pixel the shading point's position and triangle (`EMPTY` without one): the 16 bytes
-    /// classification reads, once per light (the whole shading point is 72).
-    points: Vec<(Vec3, u32)>,
-    /// Per pixel, bit `l % 8` of byte `l / 8` of its `stride` bytes: whether light `l` faces
-    /// the shading point (see [`facing`]). Pixel-major, so that one pass over the shading points
-    /// serves every light.
-    faces: Vec<u8>,
+    /// Lights that face each pixel's shading point ([`facing`]): those with a decision.
+    pub(crate) faces: LightBits,
+    /// The decision, lit or not: the map's, then the border rays'.
+    pub(crate) lit: LightBits,
+    /// The map-space border test's verdict.
+    edge: LightBits,
+    /// The (pixel, light) pairs that a shadow ray decides.
+    und: LightBits,
+    /// Of those, the rays that their occluder hint answered (with `keep_buffers` or a check).
+    by_hint: LightBits,
+    /// With a check: the decisions a plain shadow ray contradicts.
+    wrong_bits: LightBits,
 }
 
 /// [`ShadowBuffers::ray`]: no shadow ray for this pixel and light.
@@ -187,22 +239,23 @@ pub const RAY_HINT: u8 = 1;
 /// [`ShadowBuffers::ray`]: a shadow ray that traversed the BVH.
 pub const RAY_TRAVERSAL: u8 = 2;
 
-/// Resizes `v` to `n` buffers of `len` elements equal to `fill`, reusing their memory.
-fn reset<T: Clone>(v: &mut Vec<Vec<T>>, n: usize, len: usize, fill: T) {
-    v.resize_with(n, Vec::new);
-    for b in v.iter_mut() {
-        b.clear();
-        b.resize(len, fill.clone());
-    }
-}
-
 /// One frame's map-based shadows: the maps used and the per-pixel buffers.
 pub struct Shadowing<'r> {
     pub maps: Vec<Arc<LightMap>>,
     pub bufs: ShadowBuffers,
     pub lights: Vec<LightStats>,
     planes: &'r [Plane],
+    /// Per light, the map's lit and shadowed decisions (before the border rays).
+    map_counts: Vec<[u64; 2]>,
 }
+
+/// Side of the square pixel tiles of the classify pass: its shading points stay in L1 while
+/// every light decides them, and neighbouring pixels look up neighbouring texels.
+const TILE: usize = 8;
+
+/// Border pixels per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up
+/// in the same order for any thread count.
+const RAY_CHUNK: usize = 64;
 
 impl Renderer<'_> {
     /// Whether direct light is computed at `s` at all: not on surfaces that point lights do
@@ -212,34 +265,54 @@ impl Renderer<'_> {
         self.scene.materials[self.scene.material[tri as usize] as usize].is_lit()
     }
 
+    /// The shading point of the camera hit of pixel `i` of `gbuffer`, where direct light is
+    /// computed at all.
+    #[inline]
+    fn shading_point(&self, gbuffer: &[Option<Hit>], i: usize) -> Option<SurfaceHit> {
+        let w = self.scene.settings.width.max(1) as usize;
+        let hit = gbuffer[i].as_ref().filter(|h| self.needs_light(h.tri))?;
+        Some(SurfaceHit::new(self.scene, hit, self.camera_ray((i % w) as u32, (i / w) as u32).dir))
+    }
+
+    /// Per light and face (light-major), whether a camera hit the light faces falls on it.
+    fn needed_faces(&self, gbuffer: &[Option<Hit>]) -> Vec<bool> {
+        let kind = self.options.shadow.map.kind;
+        let nf = LightMap::face_count(kind);
+        let lights = &self.scene.lights;
+        let w = self.scene.settings.width.max(1) as usize;
+        (0..gbuffer.len().div_ceil(w))
+            .into_par_iter()
+            .map(|y| {
+                let mut need = vec![false; lights.len() * nf];
+                for i in y * w..((y + 1) * w).min(gbuffer.len()) {
+                    let Some(s) = self.shading_point(gbuffer, i) else { continue };
+                    let tri = &self.scene.positions[s.tri as usize];
+                    for (l, light) in lights.iter().enumerate() {
+                        if facing(&s, light, tri).is_some() {
+                            need[l * nf + LightMap::face_of(kind, s.p - light.position) as usize] = true;
+                        }
+                    }
+                }
+                need
+            })
+            .reduce(
+                || vec![false; lights.len() * nf],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(a, b)| *a |= b);
+                    a
+                },
+            )
+    }
+
     /// The light maps covering every face that a camera hit of `gbuffer` falls on, built (or
     /// extended) if the cache lacks a face. Returns the maps, how many were (re)built, and per
     /// light what was done and why. A light that no camera hit is in front of gets an empty
     /// map (no face drawn, nothing allocated): it is neither built nor counted.
-    fn light_maps(
-        &self,
-        points: &[(Vec3, u32)],
-        faces: &[u8],
-    ) -> (Vec<Arc<LightMap>>, u32, Vec<FrameDecision>) {
+    fn light_maps(&self, gbuffer: &[Option<Hit>]) -> (Vec<Arc<LightMap>>, u32, Vec<FrameDecision>) {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
         let lights = &self.scene.lights;
-        // Faces needed: per light, any hit the light faces whose direction falls on the face.
-        let stride = lights.len().div_ceil(8).max(1);
-        let needed = self.maps.needed.get_or_init(|| {
-            lights
-                .par_iter()
-                .enumerate()
-                .flat_map_iter(|(l, light)| {
-                    let mut need = vec![false; nf];
-                    let lit = faces.chunks(stride).map(|b| b[l / 8] >> (l % 8) & 1 != 0);
-                    for (&(p, _), _) in points.iter().zip(lit).filter(|(_, f)| *f) {
-                        need[LightMap::face_of(kind, p - light.position) as usize] = true;
-                    }
-                    need
-                })
-                .collect()
-        });
+        let needed = self.maps.needed.get_or_init(|| self.needed_faces(gbuffer));
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
         cache.resize(lights.len(), None);
         let mut built = 0;
@@ -295,52 +368,24 @@ impl Renderer<'_> {
         (cache.iter().map(|m| m.clone().expect("built above")).collect(), built, decisions)
     }
 
-    /// The map-build, classify and borders passes for the camera hits (module docs).
-    pub(crate) fn shadowing<'r>(&'r self, gbuffer: &[Option<Hit>], stats: &mut FrameStats) -> Shadowing<'r> {
-        let t = Instant::now();
+    /// The map-build, classify and borders passes for the camera hits (module docs); the
+    /// classify pass also writes into `direct` the direct light of every camera hit, with the
+    /// map's decisions (the border rays correct the pixels they decide).
+    pub(crate) fn shadowing<'r>(
+        &'r self,
+        gbuffer: &[Option<Hit>],
+        direct: &mut [Vec3],
+        progress: super::Progress,
+        stats: &mut FrameStats,
+    ) -> Shadowing<'r> {
         let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
         let n = w * h;
-        let nl = self.scene.lights.len();
-        let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
-        // The shading points, once for all lights and passes; only where direct light is
-        // computed at all (surfaces with a diffuse reflectance). One pass by rows writes the
-        // shading point, its position and triangle, and the lights it faces: three passes
-        // over the 72-byte shading points took twice as long. Every element is overwritten,
-        // so recycled buffers are only resized.
         let lights = &self.scene.lights;
-        let stride = nl.div_ceil(8).max(1);
-        bufs.surf.resize(n, None);
-        bufs.points.resize(n, (Vec3::ZERO, EMPTY));
-        bufs.faces.resize(n * stride, 0);
-        let rows = bufs.surf.par_chunks_mut(w.max(1)).zip(bufs.points.par_chunks_mut(w.max(1)));
-        rows.zip(bufs.faces.par_chunks_mut(w.max(1) * stride)).enumerate().for_each(
-            |(y, ((surf, points), faces))| {
-                let hits = &gbuffer[y * w..][..surf.len()];
-                let pixels = surf.iter_mut().zip(points.iter_mut()).zip(faces.chunks_mut(stride));
-                let mut sides = PlaneSides::new();
-                for (x, (((s, pt), bits), hit)) in pixels.zip(hits).enumerate() {
-                    *s = hit
-                        .as_ref()
-                        .filter(|h| self.needs_light(h.tri))
-                        .map(|h| SurfaceHit::new(self.scene, h, self.camera_ray(x as u32, y as u32).dir));
-                    *pt = s.as_ref().map_or((Vec3::ZERO, EMPTY), |s| (s.p, s.tri));
-                    bits.fill(0);
-                    let Some(s) = s else { continue };
-                    let tri = &self.scene.positions[s.tri as usize];
-                    let sides = sides.of(s.tri, tri, lights);
-                    for (l, light) in lights.iter().enumerate() {
-                        // `facing`, with the plane side reused.
-                        if light_geometry(s, light).is_some() && viewer_side(s, tri, sides[l]) {
-                            bits[l / 8] |= 1 << (l % 8);
-                        }
-                    }
-                }
-            },
-        );
-        stats.time_ms.insert("surface", ms(t));
+        let nl = lights.len();
+        let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
 
         let t = Instant::now();
-        let (maps, built, decisions) = self.light_maps(&bufs.points, &bufs.faces);
+        let (maps, built, decisions) = self.light_maps(gbuffer);
         stats.time_ms.insert("map_build", ms(t));
         stats.maps_built = built;
         stats.decisions.extend(decisions);
@@ -348,110 +393,187 @@ impl Renderer<'_> {
         let t = Instant::now();
         let (planes, point_error): (&'r [Plane], f32) = self.occluders();
         let bias = self.options.shadow.bias;
-        reset(&mut bufs.occ, nl, n, NONE);
-        reset(&mut bufs.hint, nl, n, EMPTY);
-        reset(&mut bufs.map_border, nl, n, false);
-        // Bands of TILE rows, visited in TILE x TILE pixel tiles: neighbouring pixels look up
-        // neighbouring texels, and a tile's texels stay in the cache (scan lines sweep long
-        // strips across the map).
-        const TILE: usize = 8;
+        let cls: Vec<Classifier> =
+            maps.iter().map(|map| Classifier { map, planes, bias, point_error }).collect();
+        bufs.faces.reset(n, nl);
+        bufs.lit.reset(n, nl);
+        bufs.edge.reset(n, nl);
+        let stride = bufs.faces.stride;
         let band = (TILE * w).max(1);
-        let stride = nl.div_ceil(8).max(1);
-        for (l, (map, ((occ, hint), mb))) in
-            maps.iter().zip(bufs.occ.iter_mut().zip(&mut bufs.hint).zip(&mut bufs.map_border)).enumerate()
-        {
-            let cls = Classifier { map, planes, bias, point_error };
-            let (byte, bit) = (l / 8, 1u8 << (l % 8));
-            occ.par_chunks_mut(band)
-                .zip(hint.par_chunks_mut(band))
-                .zip(mb.par_chunks_mut(band))
-                .zip(bufs.points.par_chunks(band).zip(bufs.faces.par_chunks(band * stride)))
-                .for_each(|(((o, hi), mb), (points, faces))| {
-                    let rows = points.len() / w.max(1);
-                    // Per tile, first locate every point and prefetch its texels, then decide:
-                    // the tile's cache misses overlap.
-                    let mut located = Vec::with_capacity(TILE * TILE);
-                    for x0 in (0..w).step_by(TILE) {
-                        located.clear();
-                        for y in 0..rows {
-                            let (first, last) = (y * w + x0, y * w + (x0 + TILE).min(w));
-                            for i in (first..last).filter(|&i| faces[i * stride + byte] & bit != 0) {
-                                let c = cls.locate(points[i].0);
-                                cls.prefetch(c);
-                                located.push((i, c));
+        let bands = direct
+            .par_chunks_mut(band)
+            .zip(bufs.faces.bits.par_chunks_mut(band * stride))
+            .zip(bufs.lit.bits.par_chunks_mut(band * stride))
+            .zip(bufs.edge.bits.par_chunks_mut(band * stride));
+        let counts: Vec<Vec<[u64; 2]>> = bands
+            .enumerate()
+            .map(|(b, (((out, faces), lit), edge))| {
+                let first = b * band;
+                let rows = out.len() / w.max(1);
+                let mut counts = vec![[0u64; 2]; nl];
+                // Per tile: the shading points and the lights they face, then per light every
+                // point's location (prefetching its texels, so that the tile's cache misses
+                // overlap) and decision, then the points' direct light from those decisions.
+                let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
+                let mut located = Vec::with_capacity(TILE * TILE);
+                let mut sides = PlaneSides::new();
+                for x0 in (0..w).step_by(TILE) {
+                    tile.clear();
+                    for y in 0..rows {
+                        for j in y * w + x0..y * w + (x0 + TILE).min(w) {
+                            out[j] = Vec3::ZERO;
+                            let Some(s) = self.shading_point(gbuffer, first + j) else { continue };
+                            let tri = &self.scene.positions[s.tri as usize];
+                            let sd = sides.of(s.tri, tri, lights);
+                            let bits = &mut faces[j * stride..][..stride];
+                            for (l, light) in lights.iter().enumerate() {
+                                // `facing`, with the plane side reused.
+                                if light_geometry(&s, light).is_some() && viewer_side(&s, tri, sd[l]) {
+                                    bits[l / 8] |= 1 << (l % 8);
+                                }
                             }
-                        }
-                        for &(i, c) in &located {
-                            let (p, tri) = points[i];
-                            let lk = cls.classify_at(p, tri, c);
-                            o[i] = lk.decision;
-                            hi[i] = lk.hint;
-                            mb[i] = lk.map_border;
+                            tile.push((j, s));
                         }
                     }
-                });
+                    for (l, c) in cls.iter().enumerate() {
+                        let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                        located.clear();
+                        for (k, (j, s)) in tile.iter().enumerate() {
+                            if faces[j * stride + byte] & bit != 0 {
+                                let m = c.locate(s.p);
+                                c.prefetch(m);
+                                located.push((k, m));
+                            }
+                        }
+                        for &(k, m) in &located {
+                            let (j, s) = &tile[k];
+                            let lk = c.classify_at(s.p, s.tri, m);
+                            if lk.decision == LIT {
+                                lit[j * stride + byte] |= bit;
+                            }
+                            counts[l][usize::from(lk.decision != LIT)] += 1;
+                            if lk.map_border {
+                                edge[j * stride + byte] |= bit;
+                            }
+                        }
+                    }
+                    for (j, s) in &tile {
+                        let lb = &lit[j * stride..][..stride];
+                        out[*j] = super::direct::reflect(self, s, |l, light| {
+                            if bit(lb, l) { light_geometry(s, light) } else { None }
+                        });
+                    }
+                }
+                (0..rows).for_each(|_| progress());
+                counts
+            })
+            .collect();
+        let mut map_counts = vec![[0u64; 2]; nl];
+        for c in counts {
+            for (a, b) in map_counts.iter_mut().zip(c) {
+                a[0] += b[0];
+                a[1] += b[1];
+            }
         }
         stats.time_ms.insert("classify", ms(t));
 
         let t = Instant::now();
-        let opts = &self.options.shadow;
-        let keep = self.options.keep_buffers;
-        bufs.border.clear();
-        if self.options.shadows == Shadows::Smerts {
-            bufs.undecided.resize_with(nl, Vec::new);
-            for ((u, o), mb) in bufs.undecided.iter_mut().zip(&bufs.occ).zip(&bufs.map_border) {
-                let mut b = match opts.borders {
-                    Borders::Depth => mb.clone(),
-                    Borders::Laplacian => laplacian_border(o, w, h),
-                    Borders::Both => {
-                        let mut b = laplacian_border(o, w, h);
-                        b.par_iter_mut().zip(mb).for_each(|(b, m)| *b |= *m);
-                        b
-                    }
-                };
-                if keep {
-                    bufs.border.push(b.iter().zip(o).map(|(b, o)| *b && *o != NONE).collect());
-                }
-                if opts.dilate > 0 {
-                    b = dilate(&b, w, h, opts.dilate as usize);
-                }
-                // Only pixels with a decision to make.
-                b.par_iter_mut().zip(o).for_each(|(d, o)| *d &= *o != NONE);
-                *u = b;
-            }
-        } else {
-            bufs.undecided.clear();
-            bufs.undecided.resize_with(nl, Vec::new);
-        }
+        self.borders(&mut bufs, w, h);
         stats.time_ms.insert("borders", ms(t));
 
-        let lights = bufs
-            .occ
-            .par_iter()
-            .zip(&bufs.undecided)
-            .zip(&maps)
-            .map(|((o, u), m)| {
-                let mut s = LightStats {
-                    faces_drawn: m.faces_drawn().iter().filter(|&&f| f).count() as u32,
-                    map_bytes: m.memory_bytes() as u64,
-                    ..LightStats::default()
-                };
-                for (i, &v) in o.iter().enumerate() {
-                    if v == NONE {
-                        continue;
-                    }
-                    if u.get(i).copied().unwrap_or(false) {
-                        s.undecided += 1;
-                    } else if v == LIT {
-                        s.lit += 1;
-                    } else {
-                        s.shadowed += 1;
-                    }
-                }
-                s
+        let lights = maps
+            .iter()
+            .map(|m| LightStats {
+                faces_drawn: m.faces_drawn().iter().filter(|&&f| f).count() as u32,
+                map_bytes: m.memory_bytes() as u64,
+                ..LightStats::default()
             })
             .collect();
-        Shadowing { maps, bufs, lights, planes }
+        Shadowing { maps, bufs, lights, planes, map_counts }
+    }
+
+    /// The borders pass: the (pixel, light) pairs that a shadow ray decides, `bufs.und`, from
+    /// the map-space test (`bufs.edge`) and/or the screen-space Laplacian of the decisions,
+    /// dilated; eight lights per byte operation. With `keep_buffers`, also the border before
+    /// dilation.
+    fn borders(&self, bufs: &mut ShadowBuffers, w: usize, h: usize) {
+        let opts = &self.options.shadow;
+        let n = w * h;
+        let nl = self.scene.lights.len();
+        bufs.border.clear();
+        if self.options.shadows != Shadows::Smerts {
+            bufs.und.reset(n, nl);
+            return;
+        }
+        let stride = bufs.faces.stride;
+        let (faces, lit, edge) = (&bufs.faces.bits, &bufs.lit.bits, &bufs.edge.bits);
+        bufs.und.stride = stride;
+        let und = &mut bufs.und.bits;
+        und.clear();
+        und.resize(n * stride, 0);
+        // The Laplacian on a binary map is non-zero exactly where a 4-neighbour with a decision
+        // has the other one (`hyrt_shadowmap::border`); the map-space bits are already limited
+        // to pixels with a decision.
+        let laplacian = opts.borders != Borders::Depth;
+        let map_space = opts.borders != Borders::Laplacian;
+        und.par_chunks_mut((w * stride).max(1)).enumerate().for_each(|(y, row)| {
+            for x in 0..w {
+                let p = y * w + x;
+                for b in 0..stride {
+                    let k = p * stride + b;
+                    let mut o = if map_space { edge[k] } else { 0 };
+                    if laplacian && faces[k] != 0 {
+                        let (f, li) = (faces[k], lit[k]);
+                        let mut differ =
+                            |q: usize| o |= f & faces[q * stride + b] & (li ^ lit[q * stride + b]);
+                        if x > 0 {
+                            differ(p - 1);
+                        }
+                        if x + 1 < w {
+                            differ(p + 1);
+                        }
+                        if y > 0 {
+                            differ(p - w);
+                        }
+                        if y + 1 < h {
+                            differ(p + w);
+                        }
+                    }
+                    row[x * stride + b] = o;
+                }
+            }
+        });
+        if self.options.keep_buffers {
+            bufs.border = (0..nl).map(|l| (0..n).map(|i| bit(&und[i * stride..], l)).collect()).collect();
+        }
+        let r = opts.dilate as usize;
+        if r > 0 {
+            // A square max filter: a horizontal then a vertical pass of byte ORs, then only the
+            // pixels with a decision.
+            let mut rows = vec![0u8; n * stride];
+            rows.par_chunks_mut((w * stride).max(1)).zip(und.par_chunks((w * stride).max(1))).for_each(
+                |(out, row)| {
+                    for x in 0..w {
+                        for xx in x.saturating_sub(r)..(x + r + 1).min(w) {
+                            for b in 0..stride {
+                                out[x * stride + b] |= row[xx * stride + b];
+                            }
+                        }
+                    }
+                },
+            );
+            und.par_chunks_mut((w * stride).max(1)).enumerate().for_each(|(y, out)| {
+                out.fill(0);
+                for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
+                    for (o, &m) in out.iter_mut().zip(&rows[yy * w * stride..(yy + 1) * w * stride]) {
+                        *o |= m;
+                    }
+                }
+                for (o, &f) in out.iter_mut().zip(&faces[y * w * stride..(y + 1) * w * stride]) {
+                    *o &= f;
+                }
+            });
+        }
     }
 
     /// Drops the cached light maps (made with other map options); with `kind_changed`, also
@@ -475,131 +597,234 @@ impl Renderer<'_> {
     }
 }
 
+/// The classifier of each of `maps`, with the renderer's bias.
+fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &Renderer) -> Vec<Classifier<'m>> {
+    let (bias, point_error) = (r.options.shadow.bias, r.occluders().1);
+    maps.iter().map(|map| Classifier { map, planes, bias, point_error }).collect()
+}
+
 impl Shadowing<'_> {
+    /// Light `l`'s classifier.
+    fn classifier<'m>(&'m self, r: &Renderer, l: usize) -> Classifier<'m> {
+        classifiers(&self.maps[l..=l], self.planes, r)[0]
+    }
+
     /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
-    /// answer replaces the map's in `occ`. With `check` (wrong-visibility count), also a plain
-    /// shadow ray (no hint) per (pixel, light), not counted as a frame ray, checking every
-    /// decision: the map's, the hint's and the traversal's, counted apart.
-    pub fn trace(&mut self, r: &Renderer, check: bool) -> RayCounts {
-        let w = r.scene.settings.width.max(1) as usize;
-        let n = self.bufs.surf.len();
+    /// answer replaces the map's; the direct light of the pixels with such rays is computed
+    /// again into `direct`. With `check` (wrong-visibility count), also a plain shadow ray (no
+    /// hint) per (pixel, light) with a decision, not counted as a frame ray, checking every
+    /// decision: the map's, the hint's and the traversal's, counted apart. Completes
+    /// [`Shadowing::lights`], and with `Options::keep_buffers` the per-light buffers.
+    pub fn trace(
+        &mut self,
+        r: &Renderer,
+        gbuffer: &[Option<Hit>],
+        direct: &mut [Vec3],
+        check: bool,
+    ) -> RayCounts {
+        let n = gbuffer.len();
         let nl = self.maps.len();
-        let mut total = RayCounts::default();
-        if check {
-            reset(&mut self.bufs.wrong, nl, n, false);
-        } else {
-            self.bufs.wrong.clear();
-        }
         let keep = r.options.keep_buffers;
-        if keep {
-            reset(&mut self.bufs.ray, nl, n, RAY_NONE);
-        } else {
-            self.bufs.ray.clear();
-        }
+        let cls = classifiers(&self.maps, self.planes, r);
         let b = &mut self.bufs;
-        for l in 0..nl {
-            let light = r.scene.lights[l].position;
-            let (occ, hint, und, surf) = (&mut b.occ[l], &b.hint[l], &b.undecided[l], &b.surf);
-            let mut no_check = Vec::new();
-            let wrong = b.wrong.get_mut(l).unwrap_or(&mut no_check);
-            let wrong_rows: Vec<&mut [bool]> = if check {
-                wrong.chunks_mut(w).collect()
-            } else {
-                (0..n.div_ceil(w)).map(|_| &mut [][..]).collect()
-            };
-            if !check {
-                // Only the undecided pixels, listed first (in order) and traced in fixed
-                // chunks: counts add up in the same order for any thread count.
-                let list: Vec<u32> = und
-                    .par_iter()
-                    .enumerate()
-                    .filter(|&(i, &u)| u && occ[i] != NONE)
-                    .map(|(i, _)| i as u32)
-                    .collect();
-                // Per ray: blocked, and answered by the hint.
-                let answers: Vec<(Vec<(bool, bool)>, RayCounts)> = list
-                    .par_chunks(256)
-                    .map(|chunk| {
-                        let mut c = RayCounts::default();
-                        let blocked = chunk
-                            .iter()
-                            .map(|&i| {
-                                let s = surf[i as usize].as_ref().expect("classified pixels have a hit");
-                                let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
-                                let before = c;
-                                let blocked = r.tracer.occluded_with_hint(&ray, hint[i as usize], &mut c);
-                                r.pixel_rays.add(i as usize, &before, &c);
-                                (blocked, c.shadow_hint_hits > before.shadow_hint_hits)
-                            })
-                            .collect();
-                        (blocked, c)
+        let stride = b.faces.stride;
+        b.by_hint.reset(n, nl);
+        // The pixels with rays, in order.
+        let w = r.scene.settings.width.max(1) as usize;
+        let list: Vec<u32> = (0..n.div_ceil(w))
+            .into_par_iter()
+            .flat_map_iter(|y| (y * w..((y + 1) * w).min(n)).filter(|&i| b.und.any(i)).map(|i| i as u32))
+            .collect();
+        let (und, lit) = (&b.und, &b.lit);
+        // Per chunk: per pixel its new decision bits, which of its rays the hint answered, and
+        // its direct light; the rays, and per light the rays cast and the map's lit decisions
+        // among them.
+        type Chunk = (Vec<(Vec<u8>, Vec<u8>, Vec3)>, RayCounts, Vec<[u64; 2]>);
+        let chunks: Vec<Chunk> = list
+            .par_chunks(RAY_CHUNK)
+            .map(|chunk| {
+                let mut c = RayCounts::default();
+                let mut per_light = vec![[0u64; 2]; nl];
+                let out = chunk
+                    .iter()
+                    .map(|&i| {
+                        let i = i as usize;
+                        let s = r.shading_point(gbuffer, i).expect("undecided pixels have a shading point");
+                        let mut bits = lit.pixel(i).to_vec();
+                        let mut hinted = vec![0u8; stride];
+                        let before = c;
+                        for (l, light) in r.scene.lights.iter().enumerate() {
+                            if !bit(und.pixel(i), l) {
+                                continue;
+                            }
+                            let (byte, m) = (l / 8, 1u8 << (l % 8));
+                            per_light[l][0] += 1;
+                            per_light[l][1] += u64::from(bits[byte] & m != 0);
+                            let hint = cls[l].classify(s.p, s.tri).hint;
+                            let ray = spawn_ray_to(s.p, s.p_err, s.ng, light.position);
+                            let hits = c.shadow_hint_hits;
+                            if r.tracer.occluded_with_hint(&ray, hint, &mut c) {
+                                bits[byte] &= !m;
+                            } else {
+                                bits[byte] |= m;
+                            }
+                            if c.shadow_hint_hits > hits {
+                                hinted[byte] |= m;
+                            }
+                        }
+                        r.pixel_rays.add(i, &before, &c);
+                        let color = super::direct::reflect(r, &s, |l, light| {
+                            if bit(&bits, l) { light_geometry(&s, light) } else { None }
+                        });
+                        (bits, hinted, color)
                     })
                     .collect();
-                let mut rays = b.ray.get_mut(l);
-                for (chunk, (blocked, c)) in list.chunks(256).zip(answers) {
-                    for (&i, (b, by_hint)) in chunk.iter().zip(blocked) {
-                        occ[i as usize] = if b { SHADOW } else { LIT };
-                        if let Some(rays) = rays.as_mut() {
-                            rays[i as usize] = if by_hint { RAY_HINT } else { RAY_TRAVERSAL };
-                        }
-                    }
-                    total += c;
-                }
-                continue;
+                (out, c, per_light)
+            })
+            .collect();
+        let mut total = RayCounts::default();
+        let mut und_counts = vec![[0u64; 2]; nl];
+        for (chunk, (out, c, per_light)) in list.chunks(RAY_CHUNK).zip(chunks) {
+            for (&i, (bits, hinted, color)) in chunk.iter().zip(out) {
+                let i = i as usize;
+                b.lit.bits[i * stride..][..stride].copy_from_slice(&bits);
+                b.by_hint.bits[i * stride..][..stride].copy_from_slice(&hinted);
+                direct[i] = color;
             }
-            let ray_rows: Vec<&mut [u8]> = match b.ray.get_mut(l) {
-                Some(v) => v.chunks_mut(w).collect(),
-                None => (0..n.div_ceil(w)).map(|_| &mut [][..]).collect(),
-            };
-            // Per row: frame rays, and wrong decisions by [map, hint, traversal].
-            let counts: Vec<(RayCounts, [u64; 3])> = occ
-                .par_chunks_mut(w)
-                .zip(wrong_rows)
-                .zip(ray_rows)
-                .enumerate()
-                .map(|(y, ((row, wrong_row), ray_row))| {
-                    let mut c = RayCounts::default();
-                    let mut wrong_by = [0u64; 3];
-                    for (x, o) in row.iter_mut().enumerate() {
-                        let i = y * w + x;
-                        let is_und = und.get(i).copied().unwrap_or(false);
-                        if *o == NONE || !(is_und || check) {
-                            continue;
-                        }
-                        let s = surf[i].as_ref().expect("classified pixels have a hit");
-                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
-                        // Who decides: 0 the map, 1 the hint, 2 a traversal.
-                        let mut by = 0;
-                        if is_und {
-                            let before = c;
-                            let blocked = r.tracer.occluded_with_hint(&ray, hint[i], &mut c);
-                            r.pixel_rays.add(i, &before, &c);
-                            by = if c.shadow_hint_hits > before.shadow_hint_hits { 1 } else { 2 };
-                            if let Some(k) = ray_row.get_mut(x) {
-                                *k = if by == 1 { RAY_HINT } else { RAY_TRAVERSAL };
-                            }
-                            *o = if blocked { SHADOW } else { LIT };
-                        }
-                        let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
-                        let wrong = truth != (*o == SHADOW);
-                        wrong_row[x] = wrong;
-                        wrong_by[by] += u64::from(wrong);
-                    }
-                    (c, wrong_by)
-                })
-                .collect();
-            let mut wrong_by = [0u64; 3];
-            for (c, by) in counts {
-                total += c;
-                for k in 0..3 {
-                    wrong_by[k] += by[k];
-                }
+            total += c;
+            for (a, p) in und_counts.iter_mut().zip(per_light) {
+                a[0] += p[0];
+                a[1] += p[1];
             }
-            let st = &mut self.lights[l];
-            (st.wrong, st.wrong_hint, st.wrong_traversal) =
-                (Some(wrong_by[0]), Some(wrong_by[1]), Some(wrong_by[2]));
+        }
+        for ((st, m), u) in self.lights.iter_mut().zip(&self.map_counts).zip(&und_counts) {
+            st.undecided = u[0];
+            st.lit = m[0] - u[1];
+            st.shadowed = m[1] - (u[0] - u[1]);
+        }
+        if check {
+            self.check(r, gbuffer);
+        } else {
+            self.bufs.wrong_bits.reset(0, nl);
+        }
+        if keep {
+            self.expand(r, gbuffer, check);
         }
         total
+    }
+
+    /// Checks every decision with a plain shadow ray (not counted as a frame ray): fills
+    /// `wrong_bits` and the `wrong*` counts of [`Shadowing::lights`].
+    fn check(&mut self, r: &Renderer, gbuffer: &[Option<Hit>]) {
+        let n = gbuffer.len();
+        let nl = self.maps.len();
+        let w = r.scene.settings.width.max(1) as usize;
+        let b = &mut self.bufs;
+        b.wrong_bits.reset(n, nl);
+        let stride = b.faces.stride;
+        let (faces, lit, und, by_hint) = (&b.faces, &b.lit, &b.und, &b.by_hint);
+        // Per row: per light, wrong decisions by [map, hint, traversal].
+        let rows: Vec<Vec<[u64; 3]>> = b
+            .wrong_bits
+            .bits
+            .par_chunks_mut((w * stride).max(1))
+            .enumerate()
+            .map(|(y, wrong)| {
+                let mut by = vec![[0u64; 3]; nl];
+                for x in 0..wrong.len() / stride {
+                    let i = y * w + x;
+                    if !faces.any(i) {
+                        continue;
+                    }
+                    let s = r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
+                    for (l, light) in r.scene.lights.iter().enumerate() {
+                        if !faces.get(i, l) {
+                            continue;
+                        }
+                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, light.position);
+                        let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
+                        if truth == lit.get(i, l) {
+                            wrong[x * stride + l / 8] |= 1 << (l % 8);
+                            let k = if !und.get(i, l) {
+                                0
+                            } else if by_hint.get(i, l) {
+                                1
+                            } else {
+                                2
+                            };
+                            by[l][k] += 1;
+                        }
+                    }
+                }
+                by
+            })
+            .collect();
+        let mut by = vec![[0u64; 3]; nl];
+        for row in rows {
+            for (a, r) in by.iter_mut().zip(row) {
+                for k in 0..3 {
+                    a[k] += r[k];
+                }
+            }
+        }
+        for (st, by) in self.lights.iter_mut().zip(by) {
+            (st.wrong, st.wrong_hint, st.wrong_traversal) = (Some(by[0]), Some(by[1]), Some(by[2]));
+        }
+    }
+
+    /// The per-light buffers of [`ShadowBuffers`] (for inspection), from the per-pixel bits;
+    /// the hints are looked up again.
+    fn expand(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], check: bool) {
+        let n = gbuffer.len();
+        let nl = self.maps.len();
+        let cls = classifiers(&self.maps, self.planes, r);
+        let b = &self.bufs;
+        let per_light = |f: &(dyn Fn(usize, usize) -> u8 + Sync)| -> Vec<Vec<u8>> {
+            (0..nl).map(|l| (0..n).into_par_iter().map(|i| f(i, l)).collect()).collect()
+        };
+        let occ = per_light(&|i, l| {
+            if !b.faces.get(i, l) {
+                NONE
+            } else if b.lit.get(i, l) {
+                LIT
+            } else {
+                SHADOW
+            }
+        });
+        let flags = |bits: &LightBits| -> Vec<Vec<bool>> {
+            (0..nl).map(|l| (0..n).into_par_iter().map(|i| bits.get(i, l)).collect()).collect()
+        };
+        let smerts = r.options.shadows == Shadows::Smerts;
+        let undecided = if smerts { flags(&b.und) } else { vec![Vec::new(); nl] };
+        let map_border = flags(&b.edge);
+        let wrong = if check { flags(&b.wrong_bits) } else { Vec::new() };
+        let ray = per_light(&|i, l| {
+            if !b.und.get(i, l) {
+                RAY_NONE
+            } else if b.by_hint.get(i, l) {
+                RAY_HINT
+            } else {
+                RAY_TRAVERSAL
+            }
+        });
+        let hint: Vec<Vec<u32>> = (0..nl)
+            .map(|l| {
+                (0..n)
+                    .into_par_iter()
+                    .map(|i| {
+                        if !b.faces.get(i, l) {
+                            return EMPTY;
+                        }
+                        let s =
+                            r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
+                        cls[l].classify(s.p, s.tri).hint
+                    })
+                    .collect()
+            })
+            .collect();
+        let b = &mut self.bufs;
+        (b.occ, b.undecided, b.map_border, b.wrong, b.ray, b.hint) =
+            (occ, undecided, map_border, wrong, ray, hint);
     }
 
     /// Visibility of light `l` from a mirror hit (no screen neighbours): the map's decision, or,
@@ -617,13 +842,7 @@ impl Shadowing<'_> {
         if !map.faces_drawn()[face] {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);
         }
-        let cls = Classifier {
-            map,
-            planes: self.planes,
-            bias: r.options.shadow.bias,
-            point_error: r.occluders().1,
-        };
-        let lk = cls.classify(s.p, s.tri);
+        let lk = self.classifier(r, l).classify(s.p, s.tri);
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);
         }

@@ -243,8 +243,9 @@ mod tests {
             let mut stats = FrameStats::default();
             let (g, _) = r.visibility();
             let sh = (o.shadows != crate::render::Shadows::Rays).then(|| {
-                let mut sh = r.shadowing(&g, &mut stats);
-                sh.trace(&r, false);
+                let mut direct = vec![Vec3::ZERO; g.len()];
+                let mut sh = r.shadowing(&g, &mut direct, &|| {}, &mut stats);
+                sh.trace(&r, &g, &mut direct, false);
                 sh
             });
             let v = r.vpls(&mut stats);

@@ -205,6 +205,56 @@ impl Classifier<'_> {
         let _ = c;
     }
 
+    /// Whether [`Classifier::classify`] decides every point of triangle `own` in the convex hull
+    /// of `corners` (points of `own`'s plane) [`LIT`] with no border, found from the map region
+    /// under the corners alone: `false` when it cannot tell (then classify the points).
+    ///
+    /// Why it holds: the directions from the light that a cube face covers form a convex cone,
+    /// so if every corner falls on one face, so does their hull; and within a face the map is a
+    /// central projection, which takes the hull (on one plane) to the convex polygon of the
+    /// corners' projections. Every point's 2x2 footprint then lies in the corners' bounding
+    /// box, grown by half a texel for the footprint and by a margin for rounding: the points
+    /// sit up to `sqrt(3) e` off the plane (`e` = [`Classifier::point_error`], with a factor
+    /// 16 of slack for how their barycentrics were found), which seen from at least the plane's
+    /// distance `h` turns their direction by up to `sqrt(3) e / h` radians, or
+    /// `sqrt(3) e / h * res` texels (face coordinates move by at most 2 per radian, and there
+    /// are `res / 2` texels per unit), plus one texel for the coordinates' own rounding. If
+    /// that box stays inside the face and sees no triangle but `own`
+    /// ([`LightMap::region_id`]), every point's footprint sees `own` or nothing: lit, no border.
+    /// Paraboloid maps are not central projections: always `false`.
+    pub fn hull_lit(&self, corners: &[Vec3], own: u32) -> bool {
+        let map = self.map;
+        let Some(first) = corners.first() else { return false };
+        let Some(pl) = self.planes.get(own as usize) else { return false };
+        if map.kind() != MapKind::Cube || pl.n == Vec3::ZERO {
+            return false;
+        }
+        let e = 16.0 * 3f32.sqrt() * self.point_error;
+        let h = pl.offset_from(map.light()).abs() as f32 - e;
+        let res = map.resolution() as f32;
+        let margin = 1.5 + e / h * res;
+        if !(h > 0.0 && margin < res) {
+            return false;
+        }
+        let c0 = self.locate(*first);
+        let (mut lo, mut hi) = ((c0.x, c0.y), (c0.x, c0.y));
+        for &p in &corners[1..] {
+            let c = self.locate(p);
+            if c.face != c0.face {
+                return false;
+            }
+            lo = (lo.0.min(c.x), lo.1.min(c.y));
+            hi = (hi.0.max(c.x), hi.1.max(c.y));
+        }
+        let (x0, y0) = ((lo.0 - margin).floor(), (lo.1 - margin).floor());
+        let (x1, y1) = ((hi.0 + margin).floor(), (hi.1 + margin).floor());
+        let last = res - 1.0;
+        if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= last && y1 <= last) {
+            return false;
+        }
+        matches!(map.region_id(c0.face, x0 as u32, y0 as u32, x1 as u32, y1 as u32), Some(id) if id == EMPTY || id == own)
+    }
+
     /// Visibility from the texel under `p` alone, ambiguous occluders counted as the point's own
     /// surface: for lookups that no ray will check (VPL maps, where each VPL's share of the
     /// light is small and aliasing is diluted). Cheaper than [`Classifier::classify`]: no

@@ -419,8 +419,9 @@ impl Renderer<'_> {
                 let mut sides = PlaneSides::new();
                 for x0 in (0..w).step_by(TILE) {
                     tile.clear();
+                    let x1 = (x0 + TILE).min(w);
                     for y in 0..rows {
-                        for j in y * w + x0..y * w + (x0 + TILE).min(w) {
+                        for j in y * w + x0..y * w + x1 {
                             out[j] = Vec3::ZERO;
                             let Some(s) = self.shading_point(gbuffer, first + j) else { continue };
                             let tri = &self.scene.positions[s.tri as usize];
@@ -435,8 +436,27 @@ impl Renderer<'_> {
                             tile.push((j, s));
                         }
                     }
+                    // A tile wholly on one triangle: its corner points may decide every light
+                    // that sees nothing else around them at once (`Classifier::hull_lit`).
+                    let one_tri =
+                        tile.len() == rows * (x1 - x0) && tile.iter().all(|(_, s)| s.tri == tile[0].1.tri);
+                    let corners = one_tri.then(|| {
+                        let k = tile.len() - 1;
+                        [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
+                    });
                     for (l, c) in cls.iter().enumerate() {
                         let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                        if let Some(corners) = &corners
+                            && c.hull_lit(corners, tile[0].1.tri)
+                        {
+                            for (j, _) in &tile {
+                                if faces[j * stride + byte] & bit != 0 {
+                                    lit[j * stride + byte] |= bit;
+                                    counts[l][0] += 1;
+                                }
+                            }
+                            continue;
+                        }
                         located.clear();
                         for (k, (j, s)) in tile.iter().enumerate() {
                             if faces[j * stride + byte] & bit != 0 {

@@ -1,0 +1,104 @@
+//! `Classifier::hull_lit`, the tile shortcut of classification, against `Classifier::classify`
+//! point by point: whenever it says a hull of points is lit, every point in it must be lit with
+//! no border.
+
+use glam::Vec3;
+use hyrt_shadowmap::{
+    LightMap, MapKind, MapOptions,
+    border::LIT,
+    classify::{Classifier, point_error_bound, triangle_planes},
+};
+
+/// xorshift64*, uniform in `[0, 1)`.
+struct Rng(u64);
+
+impl Rng {
+    fn f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// A floor of two triangles (ids 0 and 1) at `y = 0` of half-size `size` around `centre`, and
+/// small random occluders (ids from 2) scattered above it, below a light.
+fn scene(rng: &mut Rng, centre: Vec3, size: f32) -> Vec<[Vec3; 3]> {
+    let c = |x: f32, z: f32| centre + Vec3::new(x * size, 0.0, z * size);
+    let mut tris =
+        vec![[c(-1.0, -1.0), c(1.0, -1.0), c(1.0, 1.0)], [c(-1.0, -1.0), c(1.0, 1.0), c(-1.0, 1.0)]];
+    for _ in 0..25 {
+        let p = centre
+            + Vec3::new(
+                (2.0 * rng.f32() - 1.0) * size,
+                (0.02 + 0.5 * rng.f32()) * size,
+                (2.0 * rng.f32() - 1.0) * size,
+            );
+        let s = 0.3 * size * (0.1 + rng.f32());
+        tris.push([p, p + Vec3::new(s, 0.1 * s, 0.0), p + Vec3::new(0.0, -0.1 * s, s)]);
+    }
+    tris
+}
+
+#[test]
+fn hull_lit_implies_every_point_lit_without_border() {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let (mut said, mut asked) = (0, 0);
+    // Near the origin and far from it (rounding of the points grows with their coordinates).
+    for (centre, size) in [(Vec3::ZERO, 1.0), (Vec3::new(3.0e4, 1.0e3, -2.0e4), 20.0)] {
+        for res in [64, 256, 1024] {
+            let tris = scene(&mut rng, centre, size);
+            let light = centre + Vec3::new(0.3 * size, 1.5 * size, -0.2 * size);
+            let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
+            let map = LightMap::build(&tris, light, &opts, &[true; 6]);
+            let planes = triangle_planes(&tris);
+            let cls =
+                Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris) };
+            for _ in 0..400 {
+                // A small convex quad on the floor (a tile's corners: a perspective image of a
+                // square, here a random convex quad), on triangle 0 (x > z side).
+                let (u, v) = (-0.8 + 1.5 * rng.f32(), -0.9 + 1.5 * rng.f32());
+                let (u, v) = if u > v { (u, v) } else { (v, u) };
+                let d = 0.002 + 0.05 * rng.f32();
+                let corners = [(0.0, 0.0), (1.0, 0.1 * rng.f32()), (0.1 * rng.f32(), 1.0), (1.0, 1.0)]
+                    .map(|(a, b)| centre + Vec3::new((u + d * a) * size, 0.0, (v - d - d * b) * size));
+                let inside = |p: Vec3| (p.x - centre.x) > (p.z - centre.z);
+                if !corners.iter().all(|&p| inside(p) && (p.x - centre.x).abs() < size) {
+                    continue;
+                }
+                asked += 1;
+                if !cls.hull_lit(&corners, 0) {
+                    continue;
+                }
+                said += 1;
+                for i in 0..=16 {
+                    for j in 0..=16 {
+                        let (a, b) = (i as f32 / 16.0, j as f32 / 16.0);
+                        let p = corners[0] * (1.0 - a) * (1.0 - b)
+                            + corners[1] * a * (1.0 - b)
+                            + corners[2] * (1.0 - a) * b
+                            + corners[3] * a * b;
+                        let lk = cls.classify(p, 0);
+                        assert!(
+                            lk.decision == LIT && !lk.map_border,
+                            "res {res}, centre {centre}: hull_lit but {p} is {lk:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // Not vacuous: the shortcut answers often, and declines where occluders are.
+    assert!(said * 4 > asked && said < asked, "{said} of {asked}");
+}
+
+#[test]
+fn hull_lit_declines_paraboloids_and_empty_input() {
+    let tris = vec![[Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0)]];
+    let opts = MapOptions { kind: MapKind::Paraboloid, resolution: 64, ..MapOptions::default() };
+    let map = LightMap::build(&tris, Vec3::Y, &opts, &[true; 2]);
+    let planes = triangle_planes(&tris);
+    let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0 };
+    assert!(!cls.hull_lit(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0));
+    assert!(!cls.hull_lit(&[], 0));
+}

@@ -9,8 +9,9 @@
 //!              texels prefetched for the whole tile) and map decision -> faces, lit, edge (the
 //!              2x2 texel footprint disagrees); then the tile's direct light from those decisions
 //! borders      (Smerts) und = dilate(edge and/or laplacian(lit, faces), R), byte ops over 8 lights
-//! shadow_rays  per pixel with und bits: a shadow ray per undecided light (hint first, the hint
-//!              looked up again), its answer into lit, and the pixel's direct light again
+//! shadow_rays  the undecided (pixel, light) pairs listed light by light, in screen order: a
+//!              shadow ray each (hint first, the hint looked up again), in fixed chunks; the
+//!              answers into lit, and the direct light of those pixels again
 //! ```
 //!
 //! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points
@@ -253,8 +254,8 @@ pub struct Shadowing<'r> {
 /// every light decides them, and neighbouring pixels look up neighbouring texels.
 const TILE: usize = 8;
 
-/// Border pixels per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up
-/// in the same order for any thread count.
+/// Rays per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up in the same
+/// order for any thread count.
 const RAY_CHUNK: usize = 64;
 
 impl Renderer<'_> {
@@ -649,73 +650,83 @@ impl Shadowing<'_> {
         let b = &mut self.bufs;
         let stride = b.faces.stride;
         b.by_hint.reset(n, nl);
-        // The pixels with rays, in order.
+        // The pixels with rays, in order, and their shading points.
         let w = r.scene.settings.width.max(1) as usize;
-        let list: Vec<u32> = (0..n.div_ceil(w))
+        let pixels: Vec<u32> = (0..n.div_ceil(w))
             .into_par_iter()
             .flat_map_iter(|y| (y * w..((y + 1) * w).min(n)).filter(|&i| b.und.any(i)).map(|i| i as u32))
             .collect();
-        let (und, lit) = (&b.und, &b.lit);
-        // Per chunk: per pixel its new decision bits, which of its rays the hint answered, and
-        // its direct light; the rays, and per light the rays cast and the map's lit decisions
-        // among them.
-        type Chunk = (Vec<(Vec<u8>, Vec<u8>, Vec3)>, RayCounts, Vec<[u64; 2]>);
-        let chunks: Vec<Chunk> = list
+        let points: Vec<SurfaceHit> = pixels
+            .par_iter()
+            .map(|&i| r.shading_point(gbuffer, i as usize).expect("undecided pixels have a shading point"))
+            .collect();
+        // The rays, light by light, each light's in screen order: rays to one light from
+        // nearby points traverse the same nodes one after the other (the pixel-major order
+        // alternates lights, and a Morton order of the pixels measured slower than rows).
+        let und = &b.und;
+        let mut order: Vec<(u32, u32)> = Vec::new();
+        for l in 0..nl {
+            order.extend(
+                (0..pixels.len() as u32)
+                    .filter(|&k| und.get(pixels[k as usize] as usize, l))
+                    .map(|k| (l as u32, k)),
+            );
+        }
+        // Per chunk of rays: whether each is blocked, and whether its hint answered.
+        let answers: Vec<(Vec<(bool, bool)>, RayCounts)> = order
             .par_chunks(RAY_CHUNK)
             .map(|chunk| {
                 let mut c = RayCounts::default();
-                let mut per_light = vec![[0u64; 2]; nl];
                 let out = chunk
                     .iter()
-                    .map(|&i| {
-                        let i = i as usize;
-                        let s = r.shading_point(gbuffer, i).expect("undecided pixels have a shading point");
-                        let mut bits = lit.pixel(i).to_vec();
-                        let mut hinted = vec![0u8; stride];
-                        let before = c;
-                        for (l, light) in r.scene.lights.iter().enumerate() {
-                            if !bit(und.pixel(i), l) {
-                                continue;
-                            }
-                            let (byte, m) = (l / 8, 1u8 << (l % 8));
-                            per_light[l][0] += 1;
-                            per_light[l][1] += u64::from(bits[byte] & m != 0);
-                            let hint = cls[l].classify(s.p, s.tri).hint;
-                            let ray = spawn_ray_to(s.p, s.p_err, s.ng, light.position);
-                            let hits = c.shadow_hint_hits;
-                            if r.tracer.occluded_with_hint(&ray, hint, &mut c) {
-                                bits[byte] &= !m;
-                            } else {
-                                bits[byte] |= m;
-                            }
-                            if c.shadow_hint_hits > hits {
-                                hinted[byte] |= m;
-                            }
-                        }
-                        r.pixel_rays.add(i, &before, &c);
-                        let color = super::direct::reflect(r, &s, |l, light| {
-                            if bit(&bits, l) { light_geometry(&s, light) } else { None }
-                        });
-                        (bits, hinted, color)
+                    .map(|&(l, k)| {
+                        let (l, s) = (l as usize, &points[k as usize]);
+                        let hint = cls[l].classify(s.p, s.tri).hint;
+                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.scene.lights[l].position);
+                        let (before, hits) = (c, c.shadow_hint_hits);
+                        let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
+                        r.pixel_rays.add(pixels[k as usize] as usize, &before, &c);
+                        (blocked, c.shadow_hint_hits > hits)
                     })
                     .collect();
-                (out, c, per_light)
+                (out, c)
             })
             .collect();
         let mut total = RayCounts::default();
         let mut und_counts = vec![[0u64; 2]; nl];
-        for (chunk, (out, c, per_light)) in list.chunks(RAY_CHUNK).zip(chunks) {
-            for (&i, (bits, hinted, color)) in chunk.iter().zip(out) {
-                let i = i as usize;
-                b.lit.bits[i * stride..][..stride].copy_from_slice(&bits);
-                b.by_hint.bits[i * stride..][..stride].copy_from_slice(&hinted);
-                direct[i] = color;
+        for (chunk, (out, c)) in order.chunks(RAY_CHUNK).zip(answers) {
+            for (&(l, k), (blocked, hinted)) in chunk.iter().zip(out) {
+                let (l, i) = (l as usize, pixels[k as usize] as usize);
+                let (byte, m) = (i * stride + l / 8, 1u8 << (l % 8));
+                und_counts[l][0] += 1;
+                und_counts[l][1] += u64::from(b.lit.bits[byte] & m != 0);
+                if blocked {
+                    b.lit.bits[byte] &= !m;
+                } else {
+                    b.lit.bits[byte] |= m;
+                }
+                if hinted {
+                    b.by_hint.bits[byte] |= m;
+                }
             }
             total += c;
-            for (a, p) in und_counts.iter_mut().zip(per_light) {
-                a[0] += p[0];
-                a[1] += p[1];
-            }
+        }
+        // The direct light of the pixels with rays, again, with their final decisions.
+        let lit = &b.lit;
+        let colors: Vec<Vec3> = pixels
+            .par_iter()
+            .zip(&points)
+            .map(|(&i, s)| {
+                let bits = lit.pixel(i as usize);
+                super::direct::reflect(
+                    r,
+                    s,
+                    |l, light| if bit(bits, l) { light_geometry(s, light) } else { None },
+                )
+            })
+            .collect();
+        for (&i, c) in pixels.iter().zip(colors) {
+            direct[i as usize] = c;
         }
         for ((st, m), u) in self.lights.iter_mut().zip(&self.map_counts).zip(&und_counts) {
             st.undecided = u[0];

@@ -129,6 +129,17 @@ pub fn point_error_bound(tris: &[[Vec3; 3]]) -> f32 {
     (coord * gamma(1.0)).next_up() + (edge * gamma(3.0)).next_up()
 }
 
+/// What [`Classifier::hull`] found for a set of points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hull {
+    /// Every point is lit, with no border.
+    Lit,
+    /// Every point is shadowed, with no border.
+    Shadowed,
+    /// Classify the points one by one.
+    Unknown,
+}
+
 /// The outcome of classifying one point against one light's map.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Lookup {
@@ -205,9 +216,10 @@ impl Classifier<'_> {
         let _ = c;
     }
 
-    /// Whether [`Classifier::classify`] decides every point of triangle `own` in the convex hull
-    /// of `corners` (points of `own`'s plane) [`LIT`] with no border, found from the map region
-    /// under the corners alone: `false` when it cannot tell (then classify the points).
+    /// What [`Classifier::classify`] decides for every point of triangle `own` in the convex
+    /// hull of `corners` (points of `own`'s plane), found from the map region under the corners
+    /// alone: [`Hull::Lit`] or [`Hull::Shadowed`] (each with no border), or [`Hull::Unknown`]
+    /// when it cannot tell (then classify the points one by one).
     ///
     /// Why it holds: the directions from the light that a cube face covers form a convex cone,
     /// so if every corner falls on one face, so does their hull; and within a face the map is a
@@ -218,30 +230,44 @@ impl Classifier<'_> {
     /// 16 of slack for how their barycentrics were found), which seen from at least the plane's
     /// distance `h` turns their direction by up to `sqrt(3) e / h` radians, or
     /// `sqrt(3) e / h * res` texels (face coordinates move by at most 2 per radian, and there
-    /// are `res / 2` texels per unit), plus one texel for the coordinates' own rounding. If
-    /// that box stays inside the face and sees no triangle but `own`
-    /// ([`LightMap::region_id`]), every point's footprint sees `own` or nothing: lit, no border.
-    /// Paraboloid maps are not central projections: always `false`.
-    pub fn hull_lit(&self, corners: &[Vec3], own: u32) -> bool {
+    /// are `res / 2` texels per unit), plus one texel for the coordinates' own rounding. That
+    /// box must stay inside the face ([`LightMap::region_id`] then says what it sees):
+    ///
+    /// - only `own`, or nothing: every footprint decides lit, so the points are lit;
+    /// - only another triangle `T`: every texel of every footprint decides by `T`'s plane.
+    ///   From the light `L`, the ray towards `p` meets it at `t = r D / g(p)`, with `r = |p -
+    ///   L|`, `D` the plane's offset from `L` and `g(p) = n . (p - L)`, which is linear in `p`:
+    ///   `t / r = D / g` takes its extremes over the hull at the corners. The points are
+    ///   shadowed with no border when, at every corner (`g` widened by the points' offsets),
+    ///   `D / g` lies strictly between the near limit `SHADOW_EPSILON` and `1 - margin / r`,
+    ///   where `margin / r <= 2 bias / res + TOLERANCE + 2 sqrt(3) e / h` (a texel subtends at
+    ///   most `2 / res`, and the rounding band over `r` is `sqrt(3) e (1 / r + 1 / h)` with
+    ///   `r >= h`), each side with a relative slack of `1e-4` for the rounding of the per-point
+    ///   arithmetic; and `|g| / r` stays above the `1e-6` below which the per-point test reads
+    ///   the stored depth instead (`r` is largest at a corner: it is convex).
+    ///
+    /// Paraboloid maps are not central projections: always [`Hull::Unknown`].
+    pub fn hull(&self, corners: &[Vec3], own: u32) -> Hull {
         let map = self.map;
-        let Some(first) = corners.first() else { return false };
-        let Some(pl) = self.planes.get(own as usize) else { return false };
+        let Some(first) = corners.first() else { return Hull::Unknown };
+        let Some(pl) = self.planes.get(own as usize) else { return Hull::Unknown };
         if map.kind() != MapKind::Cube || pl.n == Vec3::ZERO {
-            return false;
+            return Hull::Unknown;
         }
+        let light = map.light();
         let e = 16.0 * 3f32.sqrt() * self.point_error;
-        let h = pl.offset_from(map.light()).abs() as f32 - e;
+        let h = pl.offset_from(light).abs() as f32 - e;
         let res = map.resolution() as f32;
         let margin = 1.5 + e / h * res;
         if !(h > 0.0 && margin < res) {
-            return false;
+            return Hull::Unknown;
         }
         let c0 = self.locate(*first);
         let (mut lo, mut hi) = ((c0.x, c0.y), (c0.x, c0.y));
         for &p in &corners[1..] {
             let c = self.locate(p);
             if c.face != c0.face {
-                return false;
+                return Hull::Unknown;
             }
             lo = (lo.0.min(c.x), lo.1.min(c.y));
             hi = (hi.0.max(c.x), hi.1.max(c.y));
@@ -250,9 +276,38 @@ impl Classifier<'_> {
         let (x1, y1) = ((hi.0 + margin).floor(), (hi.1 + margin).floor());
         let last = res - 1.0;
         if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= last && y1 <= last) {
-            return false;
+            return Hull::Unknown;
         }
-        matches!(map.region_id(c0.face, x0 as u32, y0 as u32, x1 as u32, y1 as u32), Some(id) if id == EMPTY || id == own)
+        let seen = match map.region_id(c0.face, x0 as u32, y0 as u32, x1 as u32, y1 as u32) {
+            Some(id) if id == EMPTY || id == own => return Hull::Lit,
+            Some(id) => id,
+            None => return Hull::Unknown,
+        };
+        let Some(occ) = self.planes.get(seen as usize).filter(|o| o.n != Vec3::ZERO) else {
+            return Hull::Unknown;
+        };
+        let d = occ.offset_from(light);
+        let far = 1.0 - (2.0 * self.bias / res + TOLERANCE + 2.0 * e / h) as f64;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for &p in corners {
+            let v = p - light;
+            let g = f64::from(occ.n.dot(v));
+            // The points' offsets from the hull move `g` by up to `e` (`|n| = 1`).
+            let g_near = g.abs() - f64::from(e);
+            if !(g_near > 0.0 && g_near > 2e-6 * f64::from(v.length() + e)) {
+                return Hull::Unknown;
+            }
+            for g in [g.signum() * g_near, g.signum() * (g.abs() + f64::from(e))] {
+                let ratio = d / g;
+                lo = lo.min(ratio);
+                hi = hi.max(ratio);
+            }
+        }
+        if lo > f64::from(SHADOW_EPSILON) * (1.0 + 1e-4) && hi < far * (1.0 - 1e-4) {
+            Hull::Shadowed
+        } else {
+            Hull::Unknown
+        }
     }
 
     /// Visibility from the texel under `p` alone, ambiguous occluders counted as the point's own

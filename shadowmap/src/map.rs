@@ -194,18 +194,22 @@ const REGION: u32 = 8;
 /// [`Face::region`]: a block that sees two or more triangles.
 const MIXED: u32 = EMPTY - 1;
 
-/// The region summary of a row-major `res x res` face of ids ([`Face::region`]).
+/// The region summary ([`Face::region`]) of a face's ids in [`BLOCK`] order.
 fn summarise(ids: &[u32], res: u32) -> Vec<u32> {
     if ids.is_empty() {
         return Vec::new();
     }
-    let (res, b) = (res as usize, REGION as usize);
-    let blocks = res.div_ceil(b);
+    let blocks = res.div_ceil(REGION) as usize;
+    let per = (REGION / BLOCK) as usize;
+    let blocks_x = res.div_ceil(BLOCK) as usize;
+    let cell = (BLOCK * BLOCK) as usize;
     let mut out = vec![EMPTY; blocks * blocks];
-    out.par_chunks_mut(blocks).enumerate().for_each(|(by, row)| {
-        for y in by * b..((by + 1) * b).min(res) {
-            for (bx, v) in row.iter_mut().enumerate() {
-                for &id in &ids[y * res + bx * b..y * res + ((bx + 1) * b).min(res)] {
+    out.par_chunks_mut(blocks).enumerate().for_each(|(ry, row)| {
+        for (rx, v) in row.iter_mut().enumerate() {
+            for by in ry * per..((ry + 1) * per).min(blocks_x) {
+                let first = (by * blocks_x + rx * per) * cell;
+                let last = (by * blocks_x + ((rx + 1) * per).min(blocks_x)) * cell;
+                for &id in &ids[first..last] {
                     if id != EMPTY && id != *v {
                         *v = if *v == EMPTY { id } else { MIXED };
                     }
@@ -231,29 +235,6 @@ fn texel_index(res: u32, x: u32, y: u32) -> usize {
     let blocks_x = res.div_ceil(BLOCK) as usize;
     let (bx, by) = ((x / BLOCK) as usize, (y / BLOCK) as usize);
     (by * blocks_x + bx) * (BLOCK * BLOCK) as usize + ((y % BLOCK) * BLOCK + x % BLOCK) as usize
-}
-
-/// A row-major `res x res` face in block order (see [`BLOCK`]), padded with `fill`.
-fn swizzle<T: Copy + Send + Sync>(rows: &[T], res: u32, fill: T) -> Vec<T> {
-    if rows.is_empty() {
-        return Vec::new();
-    }
-    let blocks_x = res.div_ceil(BLOCK) as usize;
-    let b = BLOCK as usize;
-    let mut out = vec![fill; blocks_x * blocks_x * b * b];
-    // One band of BLOCK rows at a time, in parallel.
-    out.par_chunks_mut(blocks_x * b * b).enumerate().for_each(|(by, band)| {
-        for dy in 0..b {
-            let y = by * b + dy;
-            if y >= res as usize {
-                break;
-            }
-            for (x, &v) in rows[y * res as usize..(y + 1) * res as usize].iter().enumerate() {
-                band[(x / b) * b * b + dy * b + x % b] = v;
-            }
-        }
-    });
-    out
 }
 
 /// A light's depth map: 6 cube faces or 2 paraboloid hemispheres (or 1 hemisphere, for VPLs).
@@ -368,56 +349,66 @@ impl LightMap {
             };
             map.triangles_drawn += clip.len() as u64;
             rasterizer.rasterize_into(&clip, &ids, resolution, resolution, &ropts, &mut target);
-            let mut face = Face {
-                id: std::mem::take(&mut target.id),
-                dist: std::mem::take(&mut target.depth),
-                region: vec![],
-            };
-            map.finish_face(&mut face);
-            let res = map.resolution;
-            map.faces.push(Face {
-                id: swizzle(&face.id, res, EMPTY),
-                dist: swizzle(&face.dist, res, f32::INFINITY),
-                region: summarise(&face.id, res),
-            });
+            // The target's buffers stay with it for the next face.
+            let face = map.finish_face(&target.id, &target.depth);
+            map.faces.push(face);
         }
         map
     }
 
-    /// Turns the rasterizer's reversed-Z depths into distances, and clears the texels outside a
-    /// paraboloid's disc.
+    /// The stored face of the rasterizer's row-major ids and reversed-Z depths, in one pass:
+    /// depths turned into distances, the texels outside a paraboloid's disc cleared, both
+    /// stored in [`BLOCK`] order (padded with [`EMPTY`] and infinity); then the region summary
+    /// ([`Face::region`]). One pass, not one per step: each of them read and wrote the whole
+    /// face, and fresh buffers for each cost page faults of their own.
     ///
     /// In `f32` (so that it vectorises): `near / depth` and the square root are correctly
     /// rounded, a few ulps in all (`~3e-7` relative) on top of the depth's own rounding.
-    fn finish_face(&self, face: &mut Face) {
+    fn finish_face(&self, ids: &[u32], depth: &[f32]) -> Face {
         let res = self.resolution as usize;
+        let b = BLOCK as usize;
+        let blocks_x = res.div_ceil(b);
         let near = self.near;
         let inv = 2.0 / self.resolution as f32;
         // Squared face coordinate of texel centre i (the same for rows: t = -s).
         let sq: Vec<f32> = (0..res).map(|i| ((i as f32 + 0.5) * inv - 1.0).powi(2)).collect();
         let cube = self.layout == Layout::Cube;
         let res32 = self.resolution;
-        face.dist.par_chunks_mut(res).zip(face.id.par_chunks_mut(res)).enumerate().for_each(
-            |(y, (dist, id))| {
-                if cube {
-                    // w = near / depth along the axis; the centre's direction (1, s, t) is
-                    // sqrt(1 + s^2 + t^2) times longer than its axis component. Reversed-Z:
-                    // empty texels hold depth 0, drawn ones near / w >= 2^-21.
-                    let row = 1.0 + sq[y];
-                    for (d, s2) in dist.iter_mut().zip(&sq) {
-                        let r = near / *d * (row + s2).sqrt();
-                        *d = if *d > 0.0 { r } else { f32::INFINITY };
-                    }
-                } else {
-                    let (x0, x1) = disc_span(res32, y as u32);
-                    for (x, (d, i)) in dist.iter_mut().zip(id.iter_mut()).enumerate() {
-                        let inside = (x0..x1).contains(&(x as u32)) && *d > 0.0;
-                        *d = if inside { near / *d } else { f32::INFINITY };
-                        *i = if inside { *i } else { EMPTY };
+        // Zeroed allocations are mapped lazily: every element is written below, once.
+        let n = blocks_x * blocks_x * b * b;
+        let (mut id, mut dist) = (vec![0u32; n], vec![0f32; n]);
+        let band = blocks_x * b * b;
+        id.par_chunks_mut(band).zip(dist.par_chunks_mut(band)).enumerate().for_each(
+            |(by, (id_out, dist_out))| {
+                for dy in 0..b {
+                    let y = by * b + dy;
+                    let (x0, x1) = if y >= res {
+                        (0, 0)
+                    } else if cube {
+                        (0, res32)
+                    } else {
+                        disc_span(res32, y as u32)
+                    };
+                    for x in 0..blocks_x * b {
+                        let k = (x / b) * b * b + dy * b + x % b;
+                        let inside = (x0..x1).contains(&(x as u32));
+                        let d = if inside { depth[y * res + x] } else { 0.0 };
+                        // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
+                        (id_out[k], dist_out[k]) = if d > 0.0 {
+                            // Cube: w = near / depth along the axis; the centre's direction
+                            // (1, s, t) is sqrt(1 + s^2 + t^2) times longer than its axis
+                            // component.
+                            let r = if cube { near / d * ((1.0 + sq[y]) + sq[x]).sqrt() } else { near / d };
+                            (ids[y * res + x], r)
+                        } else {
+                            (EMPTY, f32::INFINITY)
+                        };
                     }
                 }
             },
         );
+        let region = summarise(&id, self.resolution);
+        Face { id, dist, region }
     }
 
     /// Where direction `dir` (non-zero, from the light) falls.

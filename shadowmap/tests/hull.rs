@@ -1,12 +1,12 @@
-//! `Classifier::hull_lit`, the tile shortcut of classification, against `Classifier::classify`
-//! point by point: whenever it says a hull of points is lit, every point in it must be lit with
-//! no border.
+//! `Classifier::hull`, the tile shortcut of classification, against `Classifier::classify`
+//! point by point: whenever it says a hull of points is lit (shadowed), every point in it must
+//! be lit (shadowed) with no border.
 
 use glam::Vec3;
 use hyrt_shadowmap::{
     LightMap, MapKind, MapOptions,
     border::LIT,
-    classify::{Classifier, point_error_bound, triangle_planes},
+    classify::{Classifier, Hull, point_error_bound, triangle_planes},
 };
 
 /// xorshift64*, uniform in `[0, 1)`.
@@ -27,23 +27,30 @@ fn scene(rng: &mut Rng, centre: Vec3, size: f32) -> Vec<[Vec3; 3]> {
     let c = |x: f32, z: f32| centre + Vec3::new(x * size, 0.0, z * size);
     let mut tris =
         vec![[c(-1.0, -1.0), c(1.0, -1.0), c(1.0, 1.0)], [c(-1.0, -1.0), c(1.0, 1.0), c(-1.0, 1.0)]];
-    for _ in 0..25 {
+    for k in 0..25 {
         let p = centre
             + Vec3::new(
                 (2.0 * rng.f32() - 1.0) * size,
                 (0.02 + 0.5 * rng.f32()) * size,
                 (2.0 * rng.f32() - 1.0) * size,
             );
-        let s = 0.3 * size * (0.1 + rng.f32());
+        // A few large occluders (tables) cast shadows that whole tiles fall in; two of them
+        // flat and just above the floor, where the margin decides (contact shadows).
+        let s = if k < 4 { 0.8 } else { 0.3 * (0.1 + rng.f32()) } * size;
+        if k < 2 {
+            let p = Vec3::new(p.x, centre.y + (0.002 + 0.01 * rng.f32()) * size, p.z);
+            tris.push([p, p + Vec3::new(s, 0.0, 0.0), p + Vec3::new(0.0, 0.0, s)]);
+            continue;
+        }
         tris.push([p, p + Vec3::new(s, 0.1 * s, 0.0), p + Vec3::new(0.0, -0.1 * s, s)]);
     }
     tris
 }
 
 #[test]
-fn hull_lit_implies_every_point_lit_without_border() {
+fn hull_decisions_are_every_points_decision_without_border() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let (mut said, mut asked) = (0, 0);
+    let (mut lit, mut shadowed, mut asked) = (0, 0, 0);
     // Near the origin and far from it (rounding of the points grows with their coordinates).
     for (centre, size) in [(Vec3::ZERO, 1.0), (Vec3::new(3.0e4, 1.0e3, -2.0e4), 20.0)] {
         for res in [64, 256, 1024] {
@@ -67,10 +74,12 @@ fn hull_lit_implies_every_point_lit_without_border() {
                     continue;
                 }
                 asked += 1;
-                if !cls.hull_lit(&corners, 0) {
-                    continue;
+                let hull = cls.hull(&corners, 0);
+                match hull {
+                    Hull::Lit => lit += 1,
+                    Hull::Shadowed => shadowed += 1,
+                    Hull::Unknown => continue,
                 }
-                said += 1;
                 for i in 0..=16 {
                     for j in 0..=16 {
                         let (a, b) = (i as f32 / 16.0, j as f32 / 16.0);
@@ -80,25 +89,28 @@ fn hull_lit_implies_every_point_lit_without_border() {
                             + corners[3] * a * b;
                         let lk = cls.classify(p, 0);
                         assert!(
-                            lk.decision == LIT && !lk.map_border,
-                            "res {res}, centre {centre}: hull_lit but {p} is {lk:?}"
+                            (lk.decision == LIT) == (hull == Hull::Lit) && !lk.map_border,
+                            "res {res}, centre {centre}: {hull:?} but {p} is {lk:?}"
                         );
                     }
                 }
             }
         }
     }
-    // Not vacuous: the shortcut answers often, and declines where occluders are.
-    assert!(said * 4 > asked && said < asked, "{said} of {asked}");
+    // Not vacuous: the shortcut answers often, both ways, and declines at shadow borders.
+    assert!(
+        lit * 4 > asked && shadowed * 40 > asked && lit + shadowed < asked,
+        "{lit} + {shadowed} of {asked}"
+    );
 }
 
 #[test]
-fn hull_lit_declines_paraboloids_and_empty_input() {
+fn hull_declines_paraboloids_and_empty_input() {
     let tris = vec![[Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0)]];
     let opts = MapOptions { kind: MapKind::Paraboloid, resolution: 64, ..MapOptions::default() };
     let map = LightMap::build(&tris, Vec3::Y, &opts, &[true; 2]);
     let planes = triangle_planes(&tris);
     let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0 };
-    assert!(!cls.hull_lit(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0));
-    assert!(!cls.hull_lit(&[], 0));
+    assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0), Hull::Unknown);
+    assert_eq!(cls.hull(&[], 0), Hull::Unknown);
 }

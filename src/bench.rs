@@ -17,7 +17,7 @@
 //! PSNR is on display luminance against `rt` (direct light) or `rt-vpl` (with indirect light).
 //! Table 4.3 (SMeRTS on the thesis's GPU tracer) has no CPU counterpart and is not reproduced.
 
-use std::{collections::BTreeMap, fmt::Write as _, io::IsTerminal, path::PathBuf};
+use std::{fmt::Write as _, io::IsTerminal, path::PathBuf};
 
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -444,16 +444,12 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         }
     }
 
-    // Where each frame's time goes: the passes of every configuration, the most expensive (over
-    // all scenes and configurations) first; `vis_*` are the parts of `visibility`.
-    let mut total: BTreeMap<&str, f64> = BTreeMap::new();
-    for m in results.iter().flat_map(|r| &r.configs) {
-        for (k, v) in &m.pass_ms {
-            *total.entry(k.as_str()).or_default() += v;
-        }
-    }
-    let mut passes: Vec<(&str, f64)> = total.into_iter().collect();
-    passes.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(b.0)));
+    // Where each frame's time goes: the passes of every configuration, in frame order
+    // (`Pass::ALL`); `vis_*` are the parts of `visibility`.
+    let mut passes: Vec<&str> =
+        results.iter().flat_map(|r| &r.configs).flat_map(|m| m.pass_ms.keys()).map(String::as_str).collect();
+    passes.sort_by_key(|k| (crate::render::Pass::rank(k), *k));
+    passes.dedup();
     let _ = writeln!(
         s,
         "\n### Time per pass (ms, medians over the timed frames; `vis_*` are parts of `visibility`)\n"
@@ -461,15 +457,13 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     let _ = writeln!(
         s,
         "| scene | config | frame | {} |\n|---|---|---:|{}",
-        passes.iter().map(|p| p.0).collect::<Vec<_>>().join(" | "),
+        passes.join(" | "),
         "---:|".repeat(passes.len())
     );
     for r in results {
         for m in &r.configs {
-            let cells: Vec<String> = passes
-                .iter()
-                .map(|(k, _)| m.pass_ms.get(*k).map_or("-".into(), |v| format!("{v:.1}")))
-                .collect();
+            let cells: Vec<String> =
+                passes.iter().map(|k| m.pass_ms.get(*k).map_or("-".into(), |v| format!("{v:.1}"))).collect();
             let _ = writeln!(
                 s,
                 "| {} | `{}` | {:.1} | {} |",

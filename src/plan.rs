@@ -6,14 +6,14 @@
 use serde::Serialize;
 
 use crate::{
-    render::{Indirect, Options, Shadows, Visibility},
+    render::{Indirect, Options, Pass, Shadows, Visibility},
     scene::Scene,
 };
 
 /// A pass of the frame, run or skipped, with the reason.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct PassDecision {
-    pub pass: &'static str,
+    pub pass: Pass,
     pub reason: String,
 }
 
@@ -54,7 +54,7 @@ impl Plan {
     pub fn new(scene: &Scene, opts: &Options) -> Self {
         let mut plan = Plan::default();
         let tris = scene.triangle_count();
-        plan.add(true, "bvh_build", format!("ray casting needs a BVH over {tris} triangles"));
+        plan.add(true, Pass::BvhBuild, format!("ray casting needs a BVH over {tris} triangles"));
         let vis = match opts.visibility {
             Visibility::Rays => "rays: one primary ray per pixel".to_string(),
             Visibility::Raster => {
@@ -63,7 +63,7 @@ impl Plan {
                 )
             }
         };
-        plan.add(true, "visibility", vis);
+        plan.add(true, Pass::Visibility, vis);
 
         let lights = scene.lights.len();
         let used = scene.materials_in_use();
@@ -76,13 +76,13 @@ impl Plan {
             if light.intensity.max_element() <= 0.0 {
                 plan.add(
                     false,
-                    "light",
+                    Pass::MapBuild,
                     format!("light {l}: zero intensity: no map, no shadow rays, no VPLs"),
                 );
             }
         }
         if lights == 0 {
-            plan.add(false, "direct", "the scene has no point lights".into());
+            plan.add(false, Pass::Direct, "the scene has no point lights".into());
         } else {
             let sh = &opts.shadow;
             let kind = match sh.map.kind {
@@ -95,18 +95,18 @@ impl Plan {
             );
             match opts.shadows {
                 Shadows::Rays => {
-                    plan.add(false, "map_build", "shadows by rays: no light maps".into());
+                    plan.add(false, Pass::MapBuild, "shadows by rays: no light maps".into());
                     plan.add(
                         true,
-                        "direct",
+                        Pass::Direct,
                         format!("{lights} point light(s), {highlights}, rays: one shadow ray per lit hit and light"),
                     );
                 }
                 Shadows::Maps | Shadows::Smerts => {
-                    plan.add(true, "map_build", maps);
+                    plan.add(true, Pass::MapBuild, maps);
                     plan.add(
                         true,
-                        "classify",
+                        Pass::Classify,
                         format!(
                             "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions",
                             sh.bias
@@ -115,20 +115,20 @@ impl Plan {
                     if opts.shadows == Shadows::Smerts {
                         plan.add(
                             true,
-                            "borders",
+                            Pass::Borders,
                             format!("{} borders, dilated by {} px", sh.borders.name(), sh.dilate),
                         );
                         plan.add(
                             true,
-                            "shadow_rays",
+                            Pass::ShadowRays,
                             "one shadow ray per border pixel and light, occluder hint first; those pixels shaded again".into(),
                         );
                     } else {
-                        plan.add(false, "borders", "shadows by maps alone: no borders, no rays".into());
+                        plan.add(false, Pass::Borders, "shadows by maps alone: no borders, no rays".into());
                     }
                     plan.add(
                         false,
-                        "direct",
+                        Pass::Direct,
                         "shaded by classify (and shadow_rays on borders), no pass of its own".into(),
                     );
                 }
@@ -137,13 +137,13 @@ impl Plan {
 
         let mirrors: Vec<_> = used.iter().copied().filter(|m| m.is_mirror()).collect();
         if mirrors.is_empty() {
-            plan.add(false, "specular", "no material in use has a mirror reflectance".into());
+            plan.add(false, Pass::Specular, "no material in use has a mirror reflectance".into());
         } else if scene.settings.max_depth == 0 {
-            plan.add(false, "specular", "max_depth = 0".into());
+            plan.add(false, Pass::Specular, "max_depth = 0".into());
         } else {
             plan.add(
                 true,
-                "specular",
+                Pass::Specular,
                 format!(
                     "mirror materials {}, up to {} bounce(s)",
                     mirror_reasons(&mirrors),
@@ -153,14 +153,14 @@ impl Plan {
         }
         let io = &opts.indirect_opts;
         match opts.indirect {
-            Indirect::None => plan.add(false, "indirect", "no indirect-light settings (VPLs) requested".into()),
-            _ if lights == 0 => plan.add(false, "indirect", "no point lights to place VPLs from".into()),
+            Indirect::None => plan.add(false, Pass::Indirect, "no indirect-light settings (VPLs) requested".into()),
+            _ if lights == 0 => plan.add(false, Pass::Indirect, "no point lights to place VPLs from".into()),
             _ if io.vpl.paths == 0 || io.vpl.bounces == 0 => {
-                plan.add(false, "indirect", "0 VPL paths or bounces requested".into())
+                plan.add(false, Pass::Indirect, "0 VPL paths or bounces requested".into())
             }
             Indirect::Rays => plan.add(
                 true,
-                "indirect",
+                Pass::Indirect,
                 format!(
                     "{} VPL path(s), {} bounce(s), visibility by one shadow ray per hit and VPL",
                     io.vpl.paths, io.vpl.bounces
@@ -168,7 +168,7 @@ impl Plan {
             ),
             Indirect::Maps => plan.add(
                 true,
-                "indirect",
+                Pass::Indirect,
                 format!(
                     "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map per VPL (built once)",
                     io.vpl.paths,
@@ -180,19 +180,19 @@ impl Plan {
         plan
     }
 
-    fn add(&mut self, run: bool, pass: &'static str, reason: String) {
+    fn add(&mut self, run: bool, pass: Pass, reason: String) {
         let d = PassDecision { pass, reason };
         if run { self.run.push(d) } else { self.skipped.push(d) }
     }
 
     /// True when `pass` runs.
-    pub fn runs(&self, pass: &str) -> bool {
+    pub fn runs(&self, pass: Pass) -> bool {
         self.run.iter().any(|d| d.pass == pass)
     }
 
     /// Names of the passes that run, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
-        self.run.iter().map(|d| d.pass).collect()
+        self.run.iter().map(|d| d.pass.name()).collect()
     }
 }
 

@@ -6,7 +6,7 @@ use common::*;
 use glam::{Vec3, vec3};
 use hyrt::{
     metrics::{DisplayImage, compare},
-    render::{Frame, Indirect, Options, Renderer, Shadows},
+    render::{Frame, Indirect, Options, Pass, Renderer, Shadows},
     scene::{Camera, Material, PointLight, Scene, Settings},
 };
 
@@ -200,7 +200,7 @@ fn light_that_reaches_no_visible_surface_adds_nothing() {
 fn indirect_runs_only_when_asked() {
     let s = hyrt::scene::load("cornell").unwrap();
     let off = Renderer::new(&s, Options::hybrid());
-    assert!(off.plan.skipped.iter().any(|d| d.pass == "indirect"));
+    assert!(off.plan.skipped.iter().any(|d| d.pass == Pass::Indirect));
     let f = off.render(&|| {});
     assert_eq!((f.stats.vpls, f.stats.rays.vpl_shadow, f.stats.rays.vpl_path), (0, 0, 0));
     assert!(!f.stats.time_ms.contains_key("vpl_gen"));
@@ -208,7 +208,7 @@ fn indirect_runs_only_when_asked() {
     let mut on = Options::hybrid();
     on.indirect = Indirect::Maps;
     let r = Renderer::new(&s, on);
-    assert!(r.plan.runs("indirect"));
+    assert!(r.plan.runs(Pass::Indirect));
     let (a, b) = (r.render(&|| {}), r.render(&|| {}));
     assert!(a.stats.vpls > 0 && a.stats.rays.vpl_path > 0);
     // Cached: the second frame traces no paths and builds no maps, and gives the same bytes.

@@ -8,7 +8,7 @@ use common::floor_scene;
 use glam::{Vec3, vec3};
 use hyrt::{
     plan::FrameDecision,
-    render::{Indirect, Options, Renderer},
+    render::{Indirect, Options, Pass, Renderer},
     scene::{IndirectSettings, PointLight, Scene},
 };
 
@@ -40,12 +40,13 @@ fn reflections_only_with_mirrors() {
     depth0.settings.max_depth = 0;
     for opts in [Options::reference(), Options::hybrid()] {
         let r = Renderer::new(&with, opts);
-        assert!(r.plan.runs("specular"));
+        assert!(r.plan.runs(Pass::Specular));
         assert!(r.render(&|| {}).stats.rays.specular > 0);
         for (s, why) in [(&without, "mirror reflectance"), (&depth0, "max_depth = 0")] {
             let r = Renderer::new(s, opts);
-            assert!(!r.plan.runs("specular"));
-            let skipped = r.plan.skipped.iter().find(|d| d.pass == "specular").expect("listed as skipped");
+            assert!(!r.plan.runs(Pass::Specular));
+            let skipped =
+                r.plan.skipped.iter().find(|d| d.pass == Pass::Specular).expect("listed as skipped");
             assert!(skipped.reason.contains(why), "{skipped:?}");
             let f = r.render(&|| {});
             assert_eq!(f.stats.rays.specular, 0);
@@ -60,7 +61,7 @@ fn reflections_only_with_mirrors() {
 fn vpls_only_when_asked() {
     let plain = cornell(48, 36);
     let r = Renderer::new(&plain, Options::hybrid());
-    assert!(!r.plan.runs("indirect"));
+    assert!(!r.plan.runs(Pass::Indirect));
     let f = r.render(&|| {});
     assert_eq!((f.stats.vpls, f.stats.rays.vpl_path, f.stats.rays.vpl_shadow), (0, 0, 0));
     assert!(f.stats.decisions.iter().all(|d| !d.what.starts_with("vpl")));
@@ -71,7 +72,7 @@ fn vpls_only_when_asked() {
     let opts = knobs.options_for(&asked).unwrap();
     assert_eq!(opts.indirect, Indirect::Maps);
     let r = Renderer::new(&asked, opts);
-    assert!(r.plan.runs("indirect"));
+    assert!(r.plan.runs(Pass::Indirect));
     let f = r.render(&|| {});
     assert!(f.stats.vpls > 0 && f.stats.rays.vpl_path > 0);
     assert!(decision(&f.stats.decisions, "vpls").run);

@@ -415,7 +415,7 @@ impl Inspector {
             for (run, d) in
                 r.plan.run.iter().map(|d| (true, d)).chain(r.plan.skipped.iter().map(|d| (false, d)))
             {
-                decision_row(ui, run, d.pass, &d.reason);
+                decision_row(ui, run, d.pass.name(), &d.reason);
             }
             ui.add_space(4.0);
             if let Some(first) = &r.first_frame {
@@ -1136,28 +1136,7 @@ const RAY_ROWS: [RayRow; 8] = [
 
 /// Passes in pipeline order (then any others, then `total`).
 fn pass_order<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
-    const ORDER: [&str; 14] = [
-        "visibility",
-        "vis_cull",
-        "vis_raster",
-        "vis_resolve",
-        "map_build",
-        "classify",
-        "borders",
-        "shadow_rays",
-        "direct",
-        "vpl_gen",
-        "vpl_map_build",
-        "indirect",
-        "specular",
-        "total",
-    ];
-    let rank = |n: &str| match ORDER.iter().position(|o| *o == n) {
-        Some(i) if n != "total" => i,
-        // Unknown passes before the total.
-        None => ORDER.len(),
-        Some(_) => ORDER.len() + 1,
-    };
+    let rank = hyrt::render::Pass::rank;
     let mut v: Vec<&str> = names.collect();
     v.sort_by_key(|n| (rank(n), *n));
     v.dedup();

@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::plan::FrameDecision;
 
-use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, ms, vpl};
+use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
 
 /// The knobs of indirect light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,7 +138,7 @@ impl Renderer<'_> {
                 format!("{} VPLs reused from an earlier frame", vpls.len())
             },
         ));
-        stats.time_ms.insert("vpl_gen", ms(t));
+        stats.record(super::Pass::VplGen, t);
         let t = Instant::now();
         let mut fresh = false;
         let maps: &[LightMap] = if self.options.indirect == Indirect::Maps {
@@ -154,7 +154,7 @@ impl Renderer<'_> {
         } else {
             &[]
         };
-        stats.time_ms.insert("vpl_map_build", ms(t));
+        stats.record(super::Pass::VplMapBuild, t);
         if self.options.indirect == Indirect::Maps {
             let n = self.options.indirect_opts.map.resolution;
             stats.decisions.push(FrameDecision::new(

@@ -17,6 +17,7 @@
 pub mod cull;
 pub mod direct;
 pub mod indirect;
+pub mod pass;
 mod pixel_rays;
 pub mod shadows;
 pub mod specular;
@@ -30,6 +31,7 @@ use glam::Vec3;
 use hyrt_tracer::{Hit, Ray, RayCounts, Tracer};
 use rayon::prelude::*;
 
+pub use pass::Pass;
 pub use surface::SurfaceHit;
 
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
@@ -199,10 +201,18 @@ pub struct FrameStats {
     /// With indirect light: the number of VPLs and the memory of their maps.
     pub vpls: u32,
     pub vpl_map_bytes: u64,
-    /// Milliseconds per pass, plus `total` for the frame (scene preparation excluded).
+    /// Milliseconds per pass ([`Pass::name`]), plus `total` for the frame (scene preparation
+    /// excluded).
     pub time_ms: BTreeMap<&'static str, f64>,
     /// What this frame rebuilt or reused, and the per-light decisions of map-based shadows.
     pub decisions: Vec<crate::plan::FrameDecision>,
+}
+
+impl FrameStats {
+    /// Records the time of `pass`, begun at `start`.
+    pub fn record(&mut self, pass: Pass, start: Instant) {
+        self.time_ms.insert(pass.name(), ms(start));
+    }
 }
 
 /// A rendered frame.
@@ -336,10 +346,7 @@ impl<'a> Renderer<'a> {
 
     /// Number of pixel passes that report progress (rows each).
     pub fn progress_passes(&self) -> u32 {
-        ["visibility", "classify", "direct", "indirect", "specular"]
-            .iter()
-            .filter(|p| self.plan.runs(p))
-            .count() as u32
+        Pass::ALL.iter().filter(|p| p.reports_rows() && self.plan.runs(**p)).count() as u32
     }
 
     /// The camera ray through the centre of pixel `(x, y)`.
@@ -394,39 +401,39 @@ impl<'a> Renderer<'a> {
         ));
         let t = Instant::now();
         let gbuffer = visibility::run(self, progress, &mut stats);
-        stats.time_ms.insert("visibility", ms(t));
+        stats.record(Pass::Visibility, t);
 
         let mut direct = vec![Vec3::ZERO; n];
         let mut shadowing = None;
-        if self.plan.runs("direct") || self.plan.runs("classify") {
+        if self.plan.runs(Pass::Direct) || self.plan.runs(Pass::Classify) {
             if self.options.shadows != Shadows::Rays {
                 let mut s = self.shadowing(&gbuffer, &mut direct, progress, &mut stats);
                 let t = Instant::now();
                 stats.rays += s.trace(self, &gbuffer, &mut direct, self.options.check_visibility);
-                stats.time_ms.insert("shadow_rays", ms(t));
+                stats.record(Pass::ShadowRays, t);
                 stats.lights = s.lights.clone();
                 shadowing = Some(s);
             } else {
                 let t = Instant::now();
                 stats.rays += direct::run(self, &gbuffer, &mut direct, progress);
-                stats.time_ms.insert("direct", ms(t));
+                stats.record(Pass::Direct, t);
             }
         }
 
         let mut indirect = vec![Vec3::ZERO; n];
-        let vpls = self.plan.runs("indirect").then(|| self.vpls(&mut stats));
+        let vpls = self.plan.runs(Pass::Indirect).then(|| self.vpls(&mut stats));
         if let Some(v) = &vpls {
             let t = Instant::now();
             stats.rays += indirect::run(self, v, &gbuffer, &mut indirect, progress);
-            stats.time_ms.insert("indirect", ms(t));
+            stats.record(Pass::Indirect, t);
         }
 
         let mut spec = vec![Vec3::ZERO; n];
-        if self.plan.runs("specular") {
+        if self.plan.runs(Pass::Specular) {
             let t = Instant::now();
             stats.rays +=
                 specular::run(self, &gbuffer, shadowing.as_ref(), vpls.as_ref(), &mut spec, progress);
-            stats.time_ms.insert("specular", ms(t));
+            stats.record(Pass::Specular, t);
         }
 
         let mut film = Film::new(w, h);

@@ -31,13 +31,13 @@ use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap,
     border::{LIT, NONE, SHADOW},
-    classify::{Classifier, Plane},
+    classify::{Classifier, Hull, Plane},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit, ms};
+use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit};
 use crate::{plan::FrameDecision, scene::PointLight};
 
 /// Whether `light` can light `hit` at all (a light with some intensity, strictly in front of
@@ -387,7 +387,7 @@ impl Renderer<'_> {
 
         let t = Instant::now();
         let (maps, built, decisions) = self.light_maps(gbuffer);
-        stats.time_ms.insert("map_build", ms(t));
+        stats.record(super::Pass::MapBuild, t);
         stats.maps_built = built;
         stats.decisions.extend(decisions);
 
@@ -437,8 +437,8 @@ impl Renderer<'_> {
                             tile.push((j, s));
                         }
                     }
-                    // A tile wholly on one triangle: its corner points may decide every light
-                    // that sees nothing else around them at once (`Classifier::hull_lit`).
+                    // A tile wholly on one triangle: its corner points may decide a light at
+                    // once (`Classifier::hull`).
                     let one_tri =
                         tile.len() == rows * (x1 - x0) && tile.iter().all(|(_, s)| s.tri == tile[0].1.tri);
                     let corners = one_tri.then(|| {
@@ -447,13 +447,13 @@ impl Renderer<'_> {
                     });
                     for (l, c) in cls.iter().enumerate() {
                         let (byte, bit) = (l / 8, 1u8 << (l % 8));
-                        if let Some(corners) = &corners
-                            && c.hull_lit(corners, tile[0].1.tri)
-                        {
+                        let hull = corners.as_ref().map_or(Hull::Unknown, |k| c.hull(k, tile[0].1.tri));
+                        if hull != Hull::Unknown {
+                            let lit_all = hull == Hull::Lit;
                             for (j, _) in &tile {
                                 if faces[j * stride + byte] & bit != 0 {
-                                    lit[j * stride + byte] |= bit;
-                                    counts[l][0] += 1;
+                                    lit[j * stride + byte] |= if lit_all { bit } else { 0 };
+                                    counts[l][usize::from(!lit_all)] += 1;
                                 }
                             }
                             continue;
@@ -496,11 +496,11 @@ impl Renderer<'_> {
                 a[1] += b[1];
             }
         }
-        stats.time_ms.insert("classify", ms(t));
+        stats.record(super::Pass::Classify, t);
 
         let t = Instant::now();
         self.borders(&mut bufs, w, h);
-        stats.time_ms.insert("borders", ms(t));
+        stats.record(super::Pass::Borders, t);
 
         let lights = maps
             .iter()

@@ -40,11 +40,11 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
             let RasterScratch { rasterizer, target, clusters } = &mut *scratch;
             let t = Instant::now();
             r.clusters.visible(&r.camera, r.raster_near, clusters);
-            stats.time_ms.insert("vis_cull", super::ms(t));
+            stats.record(super::Pass::VisCull, t);
 
             let t = Instant::now();
             rasterizer.rasterize_from(&ClusterSource::new(r, clusters), w, h, &raster_options(), target);
-            stats.time_ms.insert("vis_raster", super::ms(t));
+            stats.record(super::Pass::VisRaster, t);
 
             let t = Instant::now();
             stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
@@ -69,7 +69,7 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
                     }
                 }
             });
-            stats.time_ms.insert("vis_resolve", super::ms(t));
+            stats.record(super::Pass::VisResolve, t);
         }
     }
     gbuffer

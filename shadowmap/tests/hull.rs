@@ -1,6 +1,6 @@
 //! `Classifier::hull`, the tile shortcut of classification, against `Classifier::classify`
-//! point by point: whenever it says a hull of points is lit (shadowed), every point in it must
-//! be lit (shadowed) with no border.
+//! point by point: whenever it says a hull of points is lit (shadowed), every point in it is,
+//! with no border.
 
 use glam::Vec3;
 use hyrt_shadowmap::{

@@ -194,15 +194,6 @@ const REGION: u32 = 8;
 /// [`Face::region`]: a block that sees two or more triangles.
 const MIXED: u32 = EMPTY - 1;
 
-/// `n` zeros (`u32` or `f32`), in memory the kernel is asked to back with huge pages
-/// ([`advise_huge`]). Large zeroed allocations come straight from `mmap`, untouched, so the
-/// advice comes before any page exists.
-fn zeroed_huge<T: Copy + Default + Zeroable>(n: usize) -> Vec<T> {
-    let v = vec![T::default(); n];
-    advise_huge(&v);
-    v
-}
-
 /// An empty vector with room for `n` elements, in memory the kernel is asked to back with huge
 /// pages ([`advise_huge`]): for the rasterizer's target, which writes into its capacity.
 fn reserved_huge<T>(n: usize) -> Vec<T> {
@@ -213,11 +204,13 @@ fn reserved_huge<T>(n: usize) -> Vec<T> {
 
 /// Asks the kernel to back `v`'s buffer (its whole capacity) with huge pages.
 ///
-/// Why: a face's arrays at 2048x2048 are 16 MB each, written once when the map is drawn; the
-/// first touch of fresh memory in 4 KB pages (a fault and a zeroed page each) cost as much as
-/// the drawing itself, and the lookups of classification miss the TLB on every page. With
-/// transparent huge pages in `madvise` mode (the usual Linux default) the same memory faults
-/// in 2 MB pages. A hint only: nothing changes if the kernel declines, or elsewhere than Linux.
+/// Why: the rasterizer's depth and id buffers for a 2048x2048 face are 16 MB each, fresh for
+/// every map; first touching them in 4 KB pages (a fault and a zeroed page each) was a large
+/// part of drawing the first face. With transparent huge pages in `madvise` mode (the usual
+/// Linux default) they fault in 2 MB pages. Not used for the stored faces: a frame keeps a map
+/// per light (a gigabyte on the Cornell box), and huge pages for all of it made the kernel
+/// compact memory at fault time, which made the first frame slower and erratic. A hint only:
+/// nothing changes if the kernel declines, or elsewhere than Linux.
 fn advise_huge<T>(v: &Vec<T>) {
     #[cfg(target_os = "linux")]
     {
@@ -234,12 +227,6 @@ fn advise_huge<T>(v: &Vec<T>) {
     #[cfg(not(target_os = "linux"))]
     let _ = v;
 }
-
-/// Types whose default value is all-zero bytes, so that `vec![T::default(); n]` is a zeroed
-/// allocation (left untouched by the allocator): [`zeroed_huge`]'s element types.
-trait Zeroable {}
-impl Zeroable for u32 {}
-impl Zeroable for f32 {}
 
 /// The region summary ([`Face::region`]) of a face's ids in [`BLOCK`] order.
 fn summarise(ids: &[u32], res: u32) -> Vec<u32> {
@@ -426,9 +413,10 @@ impl LightMap {
         let sq: Vec<f32> = (0..res).map(|i| ((i as f32 + 0.5) * inv - 1.0).powi(2)).collect();
         let cube = self.layout == Layout::Cube;
         let res32 = self.resolution;
-        // Zeroed allocations are mapped lazily: every element is written below, once.
+        // Zeroed allocations are mapped lazily (and not advised huge: `advise_huge`): every
+        // element is written below, once.
         let n = blocks_x * blocks_x * b * b;
-        let (mut id, mut dist) = (zeroed_huge::<u32>(n), zeroed_huge::<f32>(n));
+        let (mut id, mut dist) = (vec![0u32; n], vec![0f32; n]);
         let band = blocks_x * b * b;
         id.par_chunks_mut(band).zip(dist.par_chunks_mut(band)).enumerate().for_each(
             |(by, (id_out, dist_out))| {

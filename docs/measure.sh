@@ -6,6 +6,10 @@
 set -e
 H=./target/release/hyrt
 [ "${1:-}" = sweeps ] || $H bench --runs 10 --out docs/bench
+# The light maps' resolution, which sets the hybrid's default (docs/results.md, "Map resolution").
+for s in cornell-bunny-mirror office conference; do
+  $H sweep scenes/$s.toml --runs 7 --out docs/sweeps/$s-map-res --knob shadow-map-res=512,1024,2048,4096
+done
 $H sweep scenes/cornell-bunny-mirror.toml --runs 5 --out docs/sweeps/cornell-bunny-mirror \
   --knob shadow-map=cube,paraboloid --knob shadow-map-res=256,512,1024,2048 --knob borders=laplacian,depth,both
 $H sweep scenes/office.toml --runs 5 --out docs/sweeps/office --base "--preset hybrid --shadow-map paraboloid" \

@@ -1,0 +1,48 @@
+//! Renders frames of one scene in a loop and prints the median milliseconds per pass: a target
+//! for `perf record` and `valgrind --tool=callgrind`, without the bench's other configurations.
+//!
+//! `cargo run --release --example frames -- SCENE [FRAMES] [reference|hybrid]` (default: 30
+//! frames of the hybrid at 640x480, after a first frame that builds the maps). `HYRT_MAP_RES`
+//! overrides the light maps' resolution.
+
+use std::collections::BTreeMap;
+
+use hyrt::render::{Options, Pass, Renderer};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(spec) = args.first() else {
+        eprintln!("usage: frames SCENE [FRAMES] [reference|hybrid]");
+        std::process::exit(2);
+    };
+    let mut scene = match hyrt::scene::load(spec) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{spec}: {e:#}");
+            std::process::exit(1);
+        }
+    };
+    (scene.settings.width, scene.settings.height) = (640, 480);
+    let frames: usize = args.get(1).and_then(|n| n.parse().ok()).unwrap_or(30);
+    let mut opts = match args.get(2).map(String::as_str) {
+        Some("reference") => Options::reference(),
+        _ => Options::hybrid(),
+    };
+    if let Some(res) = std::env::var("HYRT_MAP_RES").ok().and_then(|v| v.parse().ok()) {
+        opts.shadow.map.resolution = res;
+    }
+    let r = Renderer::new(&scene, opts);
+    r.render(&|| {});
+    let mut times: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for _ in 0..frames {
+        for (k, v) in r.render(&|| {}).stats.time_ms {
+            times.entry(k).or_default().push(v);
+        }
+    }
+    let mut rows: Vec<_> = times.into_iter().collect();
+    rows.sort_by_key(|(k, _)| (Pass::rank(k), *k));
+    for (k, mut v) in rows {
+        v.sort_by(f64::total_cmp);
+        println!("{k:>14} {:8.2}", v[v.len() / 2]);
+    }
+}

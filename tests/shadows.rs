@@ -117,6 +117,30 @@ fn object_on_floor_does_not_leak_light() {
     }
 }
 
+/// Most pixels of a floor (two triangles) with one box on it are decided a whole tile at a
+/// time (the map region under the tile sees the floor alone, or the box alone in front of it),
+/// never a border pixel; the paraboloid's lookups are not central projections and decide point by
+/// point. The images are right either way (the map decisions are the per-point ones).
+#[test]
+fn most_decisions_are_made_per_tile_on_cube_maps() {
+    let mut s = scene(
+        "box on floor",
+        vec![light(vec3(2.0, 4.0, 1.0), 20.0)],
+        Camera::look_at(vec3(-3.0, 3.0, 4.0), vec3(0.3, 0.3, 0.0), Vec3::Y, 50.0),
+        (200, 150),
+    );
+    let m = s.add_material(Material::matte("grey", Vec3::splat(0.6)));
+    push_floor(&mut s, 4.0, 1, m);
+    push_box(&mut s, vec3(-0.5, 0.0, -0.5), vec3(0.5, 1.0, 0.5), m);
+    let cube = render(&s, with(Shadows::Smerts, MapKind::Cube));
+    let l = cube.stats.lights[0];
+    assert!(l.by_tile * 2 > l.lit + l.shadowed, "{l:?}");
+    assert!(l.by_tile <= l.lit + l.shadowed);
+    let para = render(&s, with(Shadows::Smerts, MapKind::Paraboloid));
+    assert_eq!(para.stats.lights[0].by_tile, 0);
+    assert_eq!(wrong(&cube), 0, "{:?}", cube.stats.lights);
+}
+
 /// Occluders straddling cube-face edges, a cube corner and the paraboloid seam (z = 0 of the
 /// map frame) cast their shadows on the walls of a room around the light: no gap along the seams
 /// (maps alone stay within a thin band of the outlines) and SMeRTS decides every pixel right.

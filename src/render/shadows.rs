@@ -133,6 +133,9 @@ pub struct LightStats {
     pub shadowed: u64,
     /// Hits decided by a shadow ray (border pixels).
     pub undecided: u64,
+    /// Of `lit` and `shadowed`, the hits decided with the rest of their 8x8 tile at once, from
+    /// the map region under the tile's corners (`Classifier::hull`), not point by point.
+    pub by_tile: u64,
     /// Map faces drawn for this light (cube: of 6, paraboloid: of 2).
     pub faces_drawn: u32,
     /// Memory of the light's map (ids and distances), in bytes.
@@ -246,8 +249,9 @@ pub struct Shadowing<'r> {
     pub bufs: ShadowBuffers,
     pub lights: Vec<LightStats>,
     planes: &'r [Plane],
-    /// Per light, the map's lit and shadowed decisions (before the border rays).
-    map_counts: Vec<[u64; 2]>,
+    /// Per light, the map's lit and shadowed decisions (before the border rays), and how many
+    /// of them were made per tile.
+    map_counts: Vec<[u64; 3]>,
 }
 
 /// Side of the square pixel tiles of the classify pass: its shading points stay in L1 while
@@ -406,12 +410,12 @@ impl Renderer<'_> {
             .zip(bufs.faces.bits.par_chunks_mut(band * stride))
             .zip(bufs.lit.bits.par_chunks_mut(band * stride))
             .zip(bufs.edge.bits.par_chunks_mut(band * stride));
-        let counts: Vec<Vec<[u64; 2]>> = bands
+        let counts: Vec<Vec<[u64; 3]>> = bands
             .enumerate()
             .map(|(b, (((out, faces), lit), edge))| {
                 let first = b * band;
                 let rows = out.len() / w.max(1);
-                let mut counts = vec![[0u64; 2]; nl];
+                let mut counts = vec![[0u64; 3]; nl];
                 // Per tile: the shading points and the lights they face, then per light every
                 // point's location (prefetching its texels, so that the tile's cache misses
                 // overlap) and decision, then the points' direct light from those decisions.
@@ -454,6 +458,7 @@ impl Renderer<'_> {
                                 if faces[j * stride + byte] & bit != 0 {
                                     lit[j * stride + byte] |= if lit_all { bit } else { 0 };
                                     counts[l][usize::from(!lit_all)] += 1;
+                                    counts[l][2] += 1;
                                 }
                             }
                             continue;
@@ -489,11 +494,12 @@ impl Renderer<'_> {
                 counts
             })
             .collect();
-        let mut map_counts = vec![[0u64; 2]; nl];
+        let mut map_counts = vec![[0u64; 3]; nl];
         for c in counts {
             for (a, b) in map_counts.iter_mut().zip(c) {
-                a[0] += b[0];
-                a[1] += b[1];
+                for k in 0..3 {
+                    a[k] += b[k];
+                }
             }
         }
         stats.record(super::Pass::Classify, t);
@@ -732,6 +738,7 @@ impl Shadowing<'_> {
             st.undecided = u[0];
             st.lit = m[0] - u[1];
             st.shadowed = m[1] - (u[0] - u[1]);
+            st.by_tile = m[2];
         }
         if check {
             self.check(r, gbuffer);

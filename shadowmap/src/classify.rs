@@ -110,6 +110,40 @@ pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Plane> {
         .collect()
 }
 
+/// Per triangle, the first triangle with the very same plane (the same [`Plane`] to the bit):
+/// coplanar triangles of a mesh (a floor, a wall) form one group, which
+/// [`LightMap::build_grouped`](crate::LightMap::build_grouped) summarises as one and
+/// [`Classifier::hull`] decides as one surface. Triangles without a plane are their own group.
+pub fn plane_groups(planes: &[Plane]) -> Vec<u32> {
+    let mut first: std::collections::HashMap<[u64; 2], u32> = std::collections::HashMap::new();
+    planes
+        .iter()
+        .enumerate()
+        .map(|(i, pl)| {
+            if *pl == Plane::ZERO {
+                return i as u32;
+            }
+            let n = pl.n.to_array().map(f32::to_bits);
+            let key =
+                [u64::from(n[0]) | u64::from(n[1]) << 32, u64::from(n[2]) ^ pl.d.to_bits().rotate_left(17)];
+            // The key may collide: compare the planes themselves.
+            match first.get(&key) {
+                Some(&g)
+                    if planes[g as usize].n.to_array().map(f32::to_bits) == n
+                        && planes[g as usize].d.to_bits() == pl.d.to_bits() =>
+                {
+                    g
+                }
+                Some(_) => i as u32,
+                None => {
+                    first.insert(key, i as u32);
+                    i as u32
+                }
+            }
+        })
+        .collect()
+}
+
 /// A bound on the absolute rounding error, per axis, of a point interpolated on one of `tris`
 /// as `hyrt_tracer::offset::hit_point` computes it, `v0 + (b1 e1 + b2 e2)`, whose bound is
 /// `gamma(1) |p| + gamma(3) (|b1 e1| + |b2 e2|)`: here `gamma(1)` times the largest finite
@@ -216,9 +250,9 @@ impl Classifier<'_> {
         let _ = c;
     }
 
-    /// What [`Classifier::classify`] decides for every point of triangle `own` in the convex
-    /// hull of `corners` (points of `own`'s plane), found from the map region under the corners
-    /// alone: [`Hull::Lit`] or [`Hull::Shadowed`] (each with no border), or [`Hull::Unknown`]
+    /// What [`Classifier::classify`] decides for every point in the convex hull of `corners`
+    /// (points of `own`'s plane) that lies on `own` or on another triangle of `own`'s `group`
+    /// (see below), found from the map region under the corners alone: [`Hull::Lit`] or [`Hull::Shadowed`] (each with no border), or [`Hull::Unknown`]
     /// when it cannot tell (then classify the points one by one).
     ///
     /// Why it holds: the directions from the light that a cube face covers form a convex cone,
@@ -233,8 +267,12 @@ impl Classifier<'_> {
     /// are `res / 2` texels per unit), plus one texel for the coordinates' own rounding. That
     /// box must stay inside the face ([`LightMap::region_id`] then says what it sees):
     ///
-    /// - only `own`, or nothing: every footprint decides lit, so the points are lit;
-    /// - only another triangle `T`: every texel of every footprint decides by `T`'s plane.
+    /// - nothing, or only `own`, or only triangles of `own`'s group `Some(g)` (its coplanar
+    ///   triangles, in a map made by
+    ///   [`LightMap::build_grouped`](crate::LightMap::build_grouped)): every footprint decides
+    ///   lit, so the points are lit (for coplanar neighbours, given the condition in the code);
+    /// - only another triangle `T` (or only triangles of another group, which share `T`'s
+    ///   plane to the bit): every texel of every footprint decides by `T`'s plane.
     ///   From the light `L`, the ray towards `p` meets it at `t = r D / g(p)`, with `r = |p -
     ///   L|`, `D` the plane's offset from `L` and `g(p) = n . (p - L)`, which is linear in `p`:
     ///   `t / r = D / g` takes its extremes over the hull at the corners. The points are
@@ -247,7 +285,7 @@ impl Classifier<'_> {
     ///   the stored depth instead (`r` is largest at a corner: it is convex).
     ///
     /// Paraboloid maps are not central projections: always [`Hull::Unknown`].
-    pub fn hull(&self, corners: &[Vec3], own: u32) -> Hull {
+    pub fn hull(&self, corners: &[Vec3], own: u32, group: Option<u32>) -> Hull {
         let map = self.map;
         let Some(first) = corners.first() else { return Hull::Unknown };
         let Some(pl) = self.planes.get(own as usize) else { return Hull::Unknown };
@@ -278,10 +316,29 @@ impl Classifier<'_> {
         if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= last && y1 <= last) {
             return Hull::Unknown;
         }
-        let seen = match map.region_id(c0.face, x0 as u32, y0 as u32, x1 as u32, y1 as u32) {
+        let (x0, y0, x1, y1) = (x0 as u32, y0 as u32, x1 as u32, y1 as u32);
+        let seen = match map.region_id(c0.face, x0, y0, x1, y1) {
             Some(id) if id == EMPTY || id == own => return Hull::Lit,
             Some(id) => id,
-            None => return Hull::Unknown,
+            // Several triangles: perhaps all of one plane (own's, or an occluder's).
+            None => match map.region_group(c0.face, x0, y0, x1, y1) {
+                Some(g) if Some(g) == group => {
+                    // Texels of other triangles of `own`'s group lie on its very plane: they
+                    // meet the ray towards a point `p` at `t` with `r - t <= r d / (h - d)`
+                    // for `p`'s offset `d` from the plane, which is at most `sqrt(3)` times
+                    // the point's rounding (the barycentrics' own error moves it along the
+                    // plane, not off it); within the tolerance when `d / h` is, with a
+                    // factor 2 of slack. And the plane is not seen edge-on (`|n . dir| = h /
+                    // r` stays above the `1e-6` below which the stored depth would decide).
+                    let d = 3f32.sqrt() * self.point_error;
+                    let r_max = corners.iter().map(|&p| (p - light).length()).fold(0.0, f32::max) + e;
+                    let flat = 2.0 * d < 0.5 * TOLERANCE * h && h / r_max > 2e-6;
+                    return if flat { Hull::Lit } else { Hull::Unknown };
+                }
+                // One occluder plane: its triangles share its `Plane` to the bit.
+                Some(g) if g != EMPTY => g,
+                _ => return Hull::Unknown,
+            },
         };
         let Some(occ) = self.planes.get(seen as usize).filter(|o| o.n != Vec3::ZERO) else {
             return Hull::Unknown;

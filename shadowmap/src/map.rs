@@ -178,8 +178,11 @@ struct Face {
     id: Vec<u32>,
     dist: Vec<f32>,
     /// Per [`REGION`]-square block of texels, row-major: the one triangle its texels see
-    /// ([`EMPTY`] if none), or [`MIXED`] (see [`LightMap::region_id`]).
+    /// ([`EMPTY`] if none) or the one group of triangles (see [`LightMap::build_grouped`]), or
+    /// [`MIXED`] (see [`LightMap::region_id`]).
     region: Vec<u32>,
+    /// The same by group of triangles ([`LightMap::build_grouped`]; empty without groups).
+    region_group: Vec<u32>,
 }
 
 /// Side of the texel blocks that [`LightMap::region_id`] summarises.
@@ -228,8 +231,9 @@ fn advise_huge<T>(v: &Vec<T>) {
     let _ = v;
 }
 
-/// The region summary ([`Face::region`]) of a face's ids in [`BLOCK`] order.
-fn summarise(ids: &[u32], res: u32) -> Vec<u32> {
+/// The region summary ([`Face::region`]) of a face's ids in [`BLOCK`] order, by `groups[id]`
+/// (by id if `groups` is empty).
+fn summarise(ids: &[u32], res: u32, groups: &[u32]) -> Vec<u32> {
     if ids.is_empty() {
         return Vec::new();
     }
@@ -244,6 +248,7 @@ fn summarise(ids: &[u32], res: u32) -> Vec<u32> {
                 let first = (by * blocks_x + rx * per) * cell;
                 let last = (by * blocks_x + ((rx + 1) * per).min(blocks_x)) * cell;
                 for &id in &ids[first..last] {
+                    let id = if id == EMPTY { id } else { groups.get(id as usize).copied().unwrap_or(id) };
                     if id != EMPTY && id != *v {
                         *v = if *v == EMPTY { id } else { MIXED };
                     }
@@ -313,11 +318,25 @@ impl LightMap {
     /// id `i`), drawing only the faces `i` with `faces[i]` (`faces.len() == face_count`).
     /// Degenerate, NaN or infinite triangles are skipped.
     pub fn build(tris: &[[Vec3; 3]], light: Vec3, opts: &MapOptions, faces: &[bool]) -> Self {
+        Self::build_grouped(tris, light, opts, faces, &[])
+    }
+
+    /// [`LightMap::build`], with a second region summary ([`LightMap::region_group`]) made of
+    /// `groups[id]` instead of triangle ids (for example
+    /// [`plane_groups`](crate::classify::plane_groups): coplanar triangles then summarise as
+    /// one). An empty `groups` means each triangle is its own group.
+    pub fn build_grouped(
+        tris: &[[Vec3; 3]],
+        light: Vec3,
+        opts: &MapOptions,
+        faces: &[bool],
+        groups: &[u32],
+    ) -> Self {
         let layout = match opts.kind {
             MapKind::Cube => Layout::Cube,
             MapKind::Paraboloid => Layout::Dual,
         };
-        Self::build_layout(tris, light, opts, layout, faces)
+        Self::build_layout(tris, light, opts, layout, faces, groups)
     }
 
     /// One paraboloid hemisphere centred on unit `axis`, seen from `origin` (a VPL's map):
@@ -328,7 +347,7 @@ impl LightMap {
     /// `+z`. [`LightMap::coord`] puts directions behind the hemisphere on its rim.
     pub fn build_hemisphere(tris: &[[Vec3; 3]], origin: Vec3, axis: Vec3, opts: &MapOptions) -> Self {
         let frame = Frame::around(axis.as_dvec3());
-        Self::build_layout(tris, origin, opts, Layout::Hemisphere(frame), &[true])
+        Self::build_layout(tris, origin, opts, Layout::Hemisphere(frame), &[true], &[])
     }
 
     fn build_layout(
@@ -337,6 +356,7 @@ impl LightMap {
         opts: &MapOptions,
         layout: Layout,
         faces: &[bool],
+        groups: &[u32],
     ) -> Self {
         let resolution = opts.resolution.clamp(1, MAX_TARGET_DIM);
         let count = layout.face_count();
@@ -389,7 +409,7 @@ impl LightMap {
             map.triangles_drawn += clip.len() as u64;
             rasterizer.rasterize_into(&clip, &ids, resolution, resolution, &ropts, &mut target);
             // The target's buffers stay with it for the next face.
-            let face = map.finish_face(&target.id, &target.depth);
+            let face = map.finish_face(&target.id, &target.depth, groups);
             map.faces.push(face);
         }
         map
@@ -403,7 +423,7 @@ impl LightMap {
     ///
     /// In `f32` (so that it vectorises): `near / depth` and the square root are correctly
     /// rounded, a few ulps in all (`~3e-7` relative) on top of the depth's own rounding.
-    fn finish_face(&self, ids: &[u32], depth: &[f32]) -> Face {
+    fn finish_face(&self, ids: &[u32], depth: &[f32], groups: &[u32]) -> Face {
         let res = self.resolution as usize;
         let b = BLOCK as usize;
         let blocks_x = res.div_ceil(b);
@@ -447,8 +467,10 @@ impl LightMap {
                 }
             },
         );
-        let region = summarise(&id, self.resolution);
-        Face { id, dist, region }
+        let region = summarise(&id, self.resolution, &[]);
+        let region_group =
+            if groups.is_empty() { Vec::new() } else { summarise(&id, self.resolution, groups) };
+        Face { id, dist, region, region_group }
     }
 
     /// Where direction `dir` (non-zero, from the light) falls.
@@ -556,11 +578,29 @@ impl LightMap {
         if f.region.is_empty() {
             return Some(EMPTY);
         }
+        self.region_in(&f.region, x0, y0, x1, y1)
+    }
+
+    /// [`LightMap::region_id`] by group of triangles (`Some(g)`: every texel holds a triangle
+    /// of group `g`, or nothing), for a map made by [`LightMap::build_grouped`]; `None`
+    /// (cannot tell) for one made without groups.
+    pub fn region_group(&self, face: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
+        let f = self.faces.get(usize::from(face))?;
+        if f.region.is_empty() {
+            return Some(EMPTY);
+        }
+        if f.region_group.is_empty() {
+            return None;
+        }
+        self.region_in(&f.region_group, x0, y0, x1, y1)
+    }
+
+    fn region_in(&self, region: &[u32], x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
         let blocks = self.resolution.div_ceil(REGION) as usize;
         let (bx0, bx1) = ((x0 / REGION) as usize, (x1.min(self.resolution - 1) / REGION) as usize);
         let mut seen = EMPTY;
         for by in (y0 / REGION) as usize..=(y1.min(self.resolution - 1) / REGION) as usize {
-            for &v in &f.region[by * blocks + bx0..=by * blocks + bx1] {
+            for &v in &region[by * blocks + bx0..=by * blocks + bx1] {
                 if v == MIXED || (v != EMPTY && seen != EMPTY && v != seen) {
                     return None;
                 }
@@ -664,7 +704,10 @@ impl LightMap {
 
     /// Bytes of texel memory.
     pub fn memory_bytes(&self) -> usize {
-        self.faces.iter().map(|f| (f.id.len() + f.dist.len() + f.region.len()) * 4).sum()
+        self.faces
+            .iter()
+            .map(|f| (f.id.len() + f.dist.len() + f.region.len() + f.region_group.len()) * 4)
+            .sum()
     }
 }
 

@@ -259,6 +259,10 @@ pub struct Renderer<'a> {
     /// maps and the VPL maps: every triangle's plane, and the rounding error of a shading point
     /// ([`hyrt_shadowmap::classify::point_error_bound`]).
     occluders: std::sync::OnceLock<(Vec<hyrt_shadowmap::classify::Plane>, f32)>,
+    /// Per triangle, its group of coplanar triangles ([`hyrt_shadowmap::classify::plane_groups`]):
+    /// the light maps summarise their regions by group, and classification decides a tile on
+    /// one plane at once. Made on first use.
+    plane_groups: std::sync::OnceLock<(Vec<u32>, Vec<bool>)>,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -293,6 +297,7 @@ impl<'a> Renderer<'a> {
             gbuffer: Default::default(),
             bounds: scene.bounds(),
             occluders: Default::default(),
+            plane_groups: Default::default(),
         }
     }
 
@@ -304,6 +309,21 @@ impl<'a> Renderer<'a> {
             (triangle_planes(&self.scene.positions), point_error_bound(&self.scene.positions))
         });
         (planes, *e)
+    }
+
+    /// Per triangle, its group of coplanar triangles, and whether the group has other
+    /// triangles (see [`Renderer::occluders`]).
+    pub fn plane_groups(&self) -> (&[u32], &[bool]) {
+        let (groups, shared) = self.plane_groups.get_or_init(|| {
+            let groups = hyrt_shadowmap::classify::plane_groups(self.occluders().0);
+            let mut size = vec![0u32; groups.len()];
+            for &g in &groups {
+                size[g as usize] += 1;
+            }
+            let shared = groups.iter().map(|&g| size[g as usize] > 1).collect();
+            (groups, shared)
+        });
+        (groups, shared)
     }
 
     /// Changes the strategies and knobs of the next frames, keeping every cache the change

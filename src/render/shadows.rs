@@ -364,8 +364,13 @@ impl Renderer<'_> {
                     Some(h) => want.iter().zip(h).map(|(w, h)| *w | *h).collect(),
                     None => want.to_vec(),
                 };
-                let map =
-                    LightMap::build(&self.scene.positions, light.position, &self.options.shadow.map, &faces);
+                let map = LightMap::build_grouped(
+                    &self.scene.positions,
+                    light.position,
+                    &self.options.shadow.map,
+                    &faces,
+                    self.plane_groups().0,
+                );
                 cache[l] = Some(Arc::new(map));
                 built += 1;
             }
@@ -400,6 +405,7 @@ impl Renderer<'_> {
         let bias = self.options.shadow.bias;
         let cls: Vec<Classifier> =
             maps.iter().map(|map| Classifier { map, planes, bias, point_error }).collect();
+        let (groups, shared) = self.plane_groups();
         bufs.faces.reset(n, nl);
         bufs.lit.reset(n, nl);
         bufs.edge.reset(n, nl);
@@ -441,17 +447,21 @@ impl Renderer<'_> {
                             tile.push((j, s));
                         }
                     }
-                    // A tile wholly on one triangle: its corner points may decide a light at
-                    // once (`Classifier::hull`).
-                    let one_tri =
-                        tile.len() == rows * (x1 - x0) && tile.iter().all(|(_, s)| s.tri == tile[0].1.tri);
+                    // A tile wholly on one plane (triangles of one group): its corner points may
+                    // decide a light at once (`Classifier::hull`).
+                    let group = |s: &SurfaceHit| groups[s.tri as usize];
+                    let one_tri = tile.len() == rows * (x1 - x0)
+                        && tile.iter().all(|(_, s)| group(s) == group(&tile[0].1));
                     let corners = one_tri.then(|| {
                         let k = tile.len() - 1;
                         [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
                     });
                     for (l, c) in cls.iter().enumerate() {
                         let (byte, bit) = (l / 8, 1u8 << (l % 8));
-                        let hull = corners.as_ref().map_or(Hull::Unknown, |k| c.hull(k, tile[0].1.tri));
+                        let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
+                            let own = tile[0].1.tri;
+                            c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)))
+                        });
                         if hull != Hull::Unknown {
                             let lit_all = hull == Hull::Lit;
                             for (j, _) in &tile {

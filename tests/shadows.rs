@@ -92,10 +92,9 @@ fn grazing_floor_has_no_acne() {
     }
 }
 
-/// A box resting on the floor, lit from above at an angle: with maps alone, light may leak
-/// under the box's edge only within a bounded band (peter-panning); SMeRTS corrects it.
-#[test]
-fn object_on_floor_does_not_leak_light() {
+/// A unit box resting on a floor of `cells x cells` quads, lit from above at an angle, seen
+/// from above at another.
+fn box_on_floor(cells: u32) -> Scene {
     let mut s = scene(
         "box on floor",
         vec![light(vec3(2.0, 4.0, 1.0), 20.0)],
@@ -103,8 +102,16 @@ fn object_on_floor_does_not_leak_light() {
         (200, 150),
     );
     let m = s.add_material(Material::matte("grey", Vec3::splat(0.6)));
-    push_floor(&mut s, 4.0, 8, m);
+    push_floor(&mut s, 4.0, cells, m);
     push_box(&mut s, vec3(-0.5, 0.0, -0.5), vec3(0.5, 1.0, 0.5), m);
+    s
+}
+
+/// A box resting on the floor, lit from above at an angle: with maps alone, light may leak
+/// under the box's edge only within a bounded band (peter-panning); SMeRTS corrects it.
+#[test]
+fn object_on_floor_does_not_leak_light() {
+    let s = box_on_floor(8);
     for kind in [MapKind::Cube, MapKind::Paraboloid] {
         let (reference, maps) = against_reference(&s, with(Shadows::Maps, kind));
         let shadow_px = maps.stats.lights[0].shadowed;
@@ -123,15 +130,7 @@ fn object_on_floor_does_not_leak_light() {
 /// point. The images are right either way (the map decisions are the per-point ones).
 #[test]
 fn most_decisions_are_made_per_tile_on_cube_maps() {
-    let mut s = scene(
-        "box on floor",
-        vec![light(vec3(2.0, 4.0, 1.0), 20.0)],
-        Camera::look_at(vec3(-3.0, 3.0, 4.0), vec3(0.3, 0.3, 0.0), Vec3::Y, 50.0),
-        (200, 150),
-    );
-    let m = s.add_material(Material::matte("grey", Vec3::splat(0.6)));
-    push_floor(&mut s, 4.0, 1, m);
-    push_box(&mut s, vec3(-0.5, 0.0, -0.5), vec3(0.5, 1.0, 0.5), m);
+    let s = box_on_floor(1);
     let cube = render(&s, with(Shadows::Smerts, MapKind::Cube));
     let l = cube.stats.lights[0];
     assert!(l.by_tile * 2 > l.lit + l.shadowed, "{l:?}");

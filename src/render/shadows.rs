@@ -634,6 +634,11 @@ impl Renderer<'_> {
     }
 }
 
+/// `f(pixel, light)` for each of `lights` lights and `n` pixels, light-major.
+fn per_light<T: Send>(lights: usize, n: usize, f: impl Fn(usize, usize) -> T + Sync) -> Vec<Vec<T>> {
+    (0..lights).map(|l| (0..n).into_par_iter().map(|i| f(i, l)).collect()).collect()
+}
+
 /// The classifier of each of `maps`, with the renderer's bias.
 fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &Renderer) -> Vec<Classifier<'m>> {
     let (bias, point_error) = (r.options.shadow.bias, r.occluders().1);
@@ -827,49 +832,28 @@ impl Shadowing<'_> {
         let nl = self.maps.len();
         let cls = classifiers(&self.maps, self.planes, r);
         let b = &self.bufs;
-        let per_light = |f: &(dyn Fn(usize, usize) -> u8 + Sync)| -> Vec<Vec<u8>> {
-            (0..nl).map(|l| (0..n).into_par_iter().map(|i| f(i, l)).collect()).collect()
-        };
-        let occ = per_light(&|i, l| {
-            if !b.faces.get(i, l) {
-                NONE
-            } else if b.lit.get(i, l) {
-                LIT
-            } else {
-                SHADOW
-            }
+        let occ = per_light(nl, n, |i, l| match (b.faces.get(i, l), b.lit.get(i, l)) {
+            (false, _) => NONE,
+            (true, true) => LIT,
+            (true, false) => SHADOW,
         });
-        let flags = |bits: &LightBits| -> Vec<Vec<bool>> {
-            (0..nl).map(|l| (0..n).into_par_iter().map(|i| bits.get(i, l)).collect()).collect()
-        };
+        let flags = |bits: &LightBits| per_light(nl, n, |i, l| bits.get(i, l));
         let smerts = r.options.shadows == Shadows::Smerts;
         let undecided = if smerts { flags(&b.und) } else { vec![Vec::new(); nl] };
         let map_border = flags(&b.edge);
         let wrong = if check { flags(&b.wrong_bits) } else { Vec::new() };
-        let ray = per_light(&|i, l| {
-            if !b.und.get(i, l) {
-                RAY_NONE
-            } else if b.by_hint.get(i, l) {
-                RAY_HINT
-            } else {
-                RAY_TRAVERSAL
-            }
+        let ray = per_light(nl, n, |i, l| match (b.und.get(i, l), b.by_hint.get(i, l)) {
+            (false, _) => RAY_NONE,
+            (true, true) => RAY_HINT,
+            (true, false) => RAY_TRAVERSAL,
         });
-        let hint: Vec<Vec<u32>> = (0..nl)
-            .map(|l| {
-                (0..n)
-                    .into_par_iter()
-                    .map(|i| {
-                        if !b.faces.get(i, l) {
-                            return EMPTY;
-                        }
-                        let s =
-                            r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
-                        cls[l].classify(s.p, s.tri).hint
-                    })
-                    .collect()
-            })
-            .collect();
+        let hint = per_light(nl, n, |i, l| {
+            if !b.faces.get(i, l) {
+                return EMPTY;
+            }
+            let s = r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
+            cls[l].classify(s.p, s.tri).hint
+        });
         let b = &mut self.bufs;
         (b.occ, b.undecided, b.map_border, b.wrong, b.ray, b.hint) =
             (occ, undecided, map_border, wrong, ray, hint);

@@ -178,8 +178,7 @@ struct Face {
     id: Vec<u32>,
     dist: Vec<f32>,
     /// Per [`REGION`]-square block of texels, row-major: the one triangle its texels see
-    /// ([`EMPTY`] if none) or the one group of triangles (see [`LightMap::build_grouped`]), or
-    /// [`MIXED`] (see [`LightMap::region_id`]).
+    /// ([`EMPTY`] if none), or [`MIXED`] (see [`LightMap::region_id`]).
     region: Vec<u32>,
     /// The same by group of triangles ([`LightMap::build_grouped`]; empty without groups).
     region_group: Vec<u32>,
@@ -231,32 +230,40 @@ fn advise_huge<T>(v: &Vec<T>) {
     let _ = v;
 }
 
-/// The region summary ([`Face::region`]) of a face's ids in [`BLOCK`] order, by `groups[id]`
-/// (by id if `groups` is empty).
-fn summarise(ids: &[u32], res: u32, groups: &[u32]) -> Vec<u32> {
+/// The region summaries of a face's ids in [`BLOCK`] order, in one pass: by triangle
+/// ([`Face::region`]) and by `groups[id]` ([`Face::region_group`], empty if `groups` is).
+fn summarise(ids: &[u32], res: u32, groups: &[u32]) -> (Vec<u32>, Vec<u32>) {
     if ids.is_empty() {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
     let blocks = res.div_ceil(REGION) as usize;
     let per = (REGION / BLOCK) as usize;
     let blocks_x = res.div_ceil(BLOCK) as usize;
     let cell = (BLOCK * BLOCK) as usize;
-    let mut out = vec![EMPTY; blocks * blocks];
-    out.par_chunks_mut(blocks).enumerate().for_each(|(ry, row)| {
-        for (rx, v) in row.iter_mut().enumerate() {
+    // One id seen, EMPTY, or MIXED once a second one shows up.
+    let see = |v: &mut u32, id: u32| {
+        if id != EMPTY && id != *v {
+            *v = if *v == EMPTY { id } else { MIXED };
+        }
+    };
+    let mut both = vec![[EMPTY; 2]; blocks * blocks];
+    both.par_chunks_mut(blocks).enumerate().for_each(|(ry, row)| {
+        for (rx, [v, g]) in row.iter_mut().enumerate() {
             for by in ry * per..((ry + 1) * per).min(blocks_x) {
                 let first = (by * blocks_x + rx * per) * cell;
                 let last = (by * blocks_x + ((rx + 1) * per).min(blocks_x)) * cell;
                 for &id in &ids[first..last] {
-                    let id = if id == EMPTY { id } else { groups.get(id as usize).copied().unwrap_or(id) };
-                    if id != EMPTY && id != *v {
-                        *v = if *v == EMPTY { id } else { MIXED };
+                    see(v, id);
+                    if !groups.is_empty() {
+                        see(g, groups.get(id as usize).copied().unwrap_or(id));
                     }
                 }
             }
         }
     });
-    out
+    let by_id = both.iter().map(|b| b[0]).collect();
+    let by_group = if groups.is_empty() { Vec::new() } else { both.iter().map(|b| b[1]).collect() };
+    (by_id, by_group)
 }
 
 /// Side of the square blocks texels are stored in: 4x4 ids are one 64-byte cache line.
@@ -467,9 +474,7 @@ impl LightMap {
                 }
             },
         );
-        let region = summarise(&id, self.resolution, &[]);
-        let region_group =
-            if groups.is_empty() { Vec::new() } else { summarise(&id, self.resolution, groups) };
+        let (region, region_group) = summarise(&id, self.resolution, groups);
         Face { id, dist, region, region_group }
     }
 

@@ -177,7 +177,7 @@ impl LightBits {
 
     #[inline]
     pub(crate) fn get(&self, i: usize, l: usize) -> bool {
-        self.bits[i * self.stride + l / 8] >> (l % 8) & 1 != 0
+        bit(self.pixel(i), l)
     }
 
     /// Pixel `i`'s bytes.
@@ -401,10 +401,8 @@ impl Renderer<'_> {
         stats.decisions.extend(decisions);
 
         let t = Instant::now();
-        let (planes, point_error): (&'r [Plane], f32) = self.occluders();
-        let bias = self.options.shadow.bias;
-        let cls: Vec<Classifier> =
-            maps.iter().map(|map| Classifier { map, planes, bias, point_error }).collect();
+        let planes: &'r [Plane] = self.occluders().0;
+        let cls = classifiers(&maps, planes, self);
         let (groups, shared) = self.plane_groups();
         bufs.faces.reset(n, nl);
         bufs.lit.reset(n, nl);
@@ -450,9 +448,9 @@ impl Renderer<'_> {
                     // A tile wholly on one plane (triangles of one group): its corner points may
                     // decide a light at once (`Classifier::hull`).
                     let group = |s: &SurfaceHit| groups[s.tri as usize];
-                    let one_tri = tile.len() == rows * (x1 - x0)
+                    let one_plane = tile.len() == rows * (x1 - x0)
                         && tile.iter().all(|(_, s)| group(s) == group(&tile[0].1));
-                    let corners = one_tri.then(|| {
+                    let corners = one_plane.then(|| {
                         let k = tile.len() - 1;
                         [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
                     });
@@ -504,14 +502,7 @@ impl Renderer<'_> {
                 counts
             })
             .collect();
-        let mut map_counts = vec![[0u64; 3]; nl];
-        for c in counts {
-            for (a, b) in map_counts.iter_mut().zip(c) {
-                for k in 0..3 {
-                    a[k] += b[k];
-                }
-            }
-        }
+        let map_counts = sum_per_light(counts, nl);
         stats.record(super::Pass::Classify, t);
 
         let t = Instant::now();
@@ -639,18 +630,28 @@ fn per_light<T: Send>(lights: usize, n: usize, f: impl Fn(usize, usize) -> T + S
     (0..lights).map(|l| (0..n).into_par_iter().map(|i| f(i, l)).collect()).collect()
 }
 
-/// The classifier of each of `maps`, with the renderer's bias.
+/// Per-light counts of parts (bands, rows) summed in order, for `lights` lights.
+fn sum_per_light<const K: usize>(parts: Vec<Vec<[u64; K]>>, lights: usize) -> Vec<[u64; K]> {
+    let mut sum = vec![[0u64; K]; lights];
+    for part in parts {
+        for (a, b) in sum.iter_mut().zip(part) {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+        }
+    }
+    sum
+}
+
+/// The classifier of `map`, with the renderer's bias.
+fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &Renderer) -> Classifier<'m> {
+    Classifier { map, planes, bias: r.options.shadow.bias, point_error: r.occluders().1 }
+}
+
+/// The classifier of each of `maps`.
 fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &Renderer) -> Vec<Classifier<'m>> {
-    let (bias, point_error) = (r.options.shadow.bias, r.occluders().1);
-    maps.iter().map(|map| Classifier { map, planes, bias, point_error }).collect()
+    maps.iter().map(|map| classifier(map, planes, r)).collect()
 }
 
 impl Shadowing<'_> {
-    /// Light `l`'s classifier.
-    fn classifier<'m>(&'m self, r: &Renderer, l: usize) -> Classifier<'m> {
-        classifiers(&self.maps[l..=l], self.planes, r)[0]
-    }
-
     /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
     /// answer replaces the map's; the direct light of the pixels with such rays is computed
     /// again into `direct`. With `check` (wrong-visibility count), also a plain shadow ray (no
@@ -812,15 +813,7 @@ impl Shadowing<'_> {
                 by
             })
             .collect();
-        let mut by = vec![[0u64; 3]; nl];
-        for row in rows {
-            for (a, r) in by.iter_mut().zip(row) {
-                for k in 0..3 {
-                    a[k] += r[k];
-                }
-            }
-        }
-        for (st, by) in self.lights.iter_mut().zip(by) {
+        for (st, by) in self.lights.iter_mut().zip(sum_per_light(rows, nl)) {
             (st.wrong, st.wrong_hint, st.wrong_traversal) = (Some(by[0]), Some(by[1]), Some(by[2]));
         }
     }
@@ -874,7 +867,7 @@ impl Shadowing<'_> {
         if !map.faces_drawn()[face] {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);
         }
-        let lk = self.classifier(r, l).classify(s.p, s.tri);
+        let lk = classifier(map, self.planes, r).classify(s.p, s.tri);
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);
         }

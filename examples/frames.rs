@@ -3,7 +3,8 @@
 //!
 //! `cargo run --release --example frames -- SCENE [FRAMES] [reference|hybrid]` (default: 30
 //! frames of the hybrid at 640x480, after a first frame that builds the maps). `HYRT_MAP_RES`
-//! overrides the light maps' resolution.
+//! overrides the light maps' resolution; `HYRT_VPLS=N` adds indirect light from `N` VPL paths
+//! by maps (`HYRT_VPL_RAYS=1`: by rays), `HYRT_VPL_RES` and `HYRT_INTERLEAVE` set its knobs.
 
 use std::collections::BTreeMap;
 
@@ -30,6 +31,18 @@ fn main() {
     };
     if let Some(res) = std::env::var("HYRT_MAP_RES").ok().and_then(|v| v.parse().ok()) {
         opts.shadow.map.resolution = res;
+    }
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<u32>().ok());
+    if let Some(n) = env("HYRT_VPLS") {
+        opts.indirect =
+            if env("HYRT_VPL_RAYS") == Some(1) { hyrt::render::Indirect::Rays } else { hyrt::render::Indirect::Maps };
+        opts.indirect_opts.vpl.paths = n;
+    }
+    if let Some(res) = env("HYRT_VPL_RES") {
+        opts.indirect_opts.map.resolution = res;
+    }
+    if let Some(k) = env("HYRT_INTERLEAVE") {
+        opts.indirect_opts.interleave = k;
     }
     let r = Renderer::new(&scene, opts);
     r.render(&|| {});

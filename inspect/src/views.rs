@@ -21,6 +21,7 @@ use hyrt::{
 use hyrt_shadowmap::{
     LightMap,
     border::{LIT, NONE, SHADOW},
+    plane_map::PlaneMap,
 };
 use hyrt_tracer::RayCounts;
 
@@ -202,20 +203,32 @@ pub fn depth_face_image(map: &LightMap, face: u8, max_side: u32, range: (f32, f3
     if !map.faces_drawn().get(usize::from(face)).copied().unwrap_or(false) {
         return None;
     }
-    let res = map.resolution();
+    Some(depth_image(map.resolution(), max_side, range, |x, y| {
+        map.texel_in_domain(face, x, y).then(|| map.depth(face, x, y))
+    }))
+}
+
+/// A VPL's plane map as [`depth_face_image`] shows a light map's face.
+pub fn plane_map_image(map: &PlaneMap, max_side: u32, range: (f32, f32)) -> ColorImage {
+    depth_image(map.resolution(), max_side, range, |x, y| map.in_domain(x, y).then(|| map.depth(x, y)))
+}
+
+/// An image of `depth(x, y)` (`None` outside the map's domain) at most `max_side` a side.
+fn depth_image(
+    res: u32,
+    max_side: u32,
+    range: (f32, f32),
+    depth: impl Fn(u32, u32) -> Option<f32>,
+) -> ColorImage {
     let side = res.min(max_side).max(1);
     let mut pixels = Vec::with_capacity((side * side) as usize);
     for y in 0..side {
         for x in 0..side {
-            let (tx, ty) = (texel_of(x, side, res), texel_of(y, side, res));
-            pixels.push(if !map.texel_in_domain(face, tx, ty) {
-                OUTSIDE_COLOR
-            } else {
-                depth_color(map.depth(face, tx, ty), range)
-            });
+            let d = depth(texel_of(x, side, res), texel_of(y, side, res));
+            pixels.push(d.map_or(OUTSIDE_COLOR, |d| depth_color(d, range)));
         }
     }
-    Some(ColorImage::new([side as usize, side as usize], pixels))
+    ColorImage::new([side as usize, side as usize], pixels)
 }
 
 /// The texel of a `res`-texel side under the centre of pixel `i` of a `side`-pixel image.
@@ -226,16 +239,21 @@ fn texel_of(i: u32, side: u32, res: u32) -> u32 {
 /// Nearest and farthest finite depths of the drawn faces, over the texels a `max_side` image
 /// samples; `None` when nothing was drawn.
 pub fn depth_range(map: &LightMap, max_side: u32) -> Option<(f32, f32)> {
-    let res = map.resolution();
+    let faces: Vec<u8> = (0..map.faces() as u8).filter(|&f| map.faces_drawn()[usize::from(f)]).collect();
+    range_of(map.resolution(), max_side, |x, y| faces.iter().map(|&f| map.depth(f, x, y)).collect())
+}
+
+/// [`depth_range`] of a VPL's plane map.
+pub fn plane_map_range(map: &PlaneMap, max_side: u32) -> Option<(f32, f32)> {
+    range_of(map.resolution(), max_side, |x, y| vec![map.depth(x, y)])
+}
+
+fn range_of(res: u32, max_side: u32, depths: impl Fn(u32, u32) -> Vec<f32>) -> Option<(f32, f32)> {
     let side = res.min(max_side).max(1);
     let mut range: Option<(f32, f32)> = None;
-    for face in 0..map.faces() as u8 {
-        if !map.faces_drawn()[usize::from(face)] {
-            continue;
-        }
-        for y in 0..side {
-            for x in 0..side {
-                let d = map.depth(face, texel_of(x, side, res), texel_of(y, side, res));
+    for y in 0..side {
+        for x in 0..side {
+            for d in depths(texel_of(x, side, res), texel_of(y, side, res)) {
                 if d.is_finite() && d > 0.0 {
                     range = Some(range.map_or((d, d), |(lo, hi)| (lo.min(d), hi.max(d))));
                 }

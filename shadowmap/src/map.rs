@@ -750,7 +750,7 @@ fn disc_span(res: u32, y: u32) -> (u32, u32) {
 
 /// The texel of the disc nearest to point `(x, y)` (distance to its square) among the 3x3 around
 /// the point's texel, the first in row-major order on ties.
-fn nearest_in_disc(res: u32, x: f32, y: f32) -> Option<(u32, u32)> {
+pub(crate) fn nearest_in_disc(res: u32, x: f32, y: f32) -> Option<(u32, u32)> {
     let (ix, iy) = (x as u32, y as u32);
     let mut best: Option<(f32, u32, u32)> = None;
     for jy in iy.saturating_sub(1)..=(iy + 1).min(res - 1) {

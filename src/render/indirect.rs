@@ -10,15 +10,13 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::Vec3;
-use hyrt_shadowmap::{
-    LightMap, MapOptions,
-    classify::{Classifier, Plane},
-};
+use hyrt_shadowmap::{MapOptions, plane_map::PlaneMap};
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
 use crate::plan::FrameDecision;
 
+use super::gather::{self, Points, Sums, VplConsts};
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
 
 /// The knobs of indirect light.
@@ -86,13 +84,13 @@ impl Default for IndirectOptions {
 #[derive(Default)]
 pub(crate) struct VplCache {
     vpls: OnceLock<(Vec<vpl::Vpl>, RayCounts)>,
-    maps: OnceLock<Vec<LightMap>>,
+    maps: OnceLock<Vec<PlaneMap>>,
 }
 
 impl Renderer<'_> {
     /// The cached VPLs and, with `Indirect::Maps`, their maps (for inspection), once a frame
     /// has made them.
-    pub fn cached_vpls(&self) -> Option<(&[vpl::Vpl], &[LightMap])> {
+    pub fn cached_vpls(&self) -> Option<(&[vpl::Vpl], &[PlaneMap])> {
         let (vpls, _) = self.vpl_cache.vpls.get()?;
         Some((vpls, self.vpl_cache.maps.get().map_or(&[][..], |m| &m[..])))
     }
@@ -109,8 +107,9 @@ impl VplCache {
 pub struct Vpls<'r> {
     pub vpls: &'r [vpl::Vpl],
     /// One map per VPL with `Indirect::Maps`, else empty.
-    pub maps: &'r [LightMap],
-    planes: &'r [Plane],
+    pub maps: &'r [PlaneMap],
+    /// Per map, what the gather needs of it and of its VPL.
+    consts: Vec<VplConsts>,
     /// `d_min^2` in scene units.
     clamp2: f32,
 }
@@ -141,14 +140,13 @@ impl Renderer<'_> {
         stats.record(super::Pass::VplGen, t);
         let t = Instant::now();
         let mut fresh = false;
-        let maps: &[LightMap] = if self.options.indirect == Indirect::Maps {
+        let maps: &[PlaneMap] = if self.options.indirect == Indirect::Maps {
             self.vpl_cache.maps.get_or_init(|| {
                 fresh = true;
+                let planes = self.occluders().0;
                 // One VPL map after another: each build is parallel inside.
                 vpls.iter()
-                    .map(|v| {
-                        LightMap::build_hemisphere(&self.scene.positions, v.position, v.normal, &opts.map)
-                    })
+                    .map(|v| PlaneMap::build(&self.scene.positions, planes, v.position, v.normal, &opts.map))
                     .collect()
             })
         } else {
@@ -169,10 +167,12 @@ impl Renderer<'_> {
         }
         stats.vpls = vpls.len() as u32;
         stats.vpl_map_bytes = maps.iter().map(|m| m.memory_bytes() as u64).sum();
-        let planes = self.occluders().0;
         let diag = self.bounds.map_or(1.0, |(lo, hi)| (hi - lo).length());
         let clamp = opts.clamp.max(0.0) * diag;
-        Vpls { vpls, maps, planes, clamp2: clamp * clamp }
+        let clamp2 = clamp * clamp;
+        let e = self.occluders().1;
+        let consts = vpls.iter().zip(maps).map(|(v, m)| VplConsts::new(v, m, clamp2, opts.bias, e)).collect();
+        Vpls { vpls, maps, consts, clamp2 }
     }
 }
 
@@ -219,25 +219,22 @@ impl Vpls<'_> {
         let stride = stride.max(1);
         for (k, v) in self.vpls.iter().enumerate().skip(subset).step_by(stride) {
             let Some(g) = self.geometry(s, v) else { continue };
-            let visible = match self.maps.get(k) {
+            match self.maps.get(k) {
                 // No rays to settle it: an occluder within the bias band is taken to be the
                 // point's own curved surface (the commoner case), not a contact shadow.
                 Some(map) => {
-                    let cls = Classifier {
-                        map,
-                        planes: self.planes,
-                        bias: r.options.indirect_opts.bias,
-                        point_error: r.occluders().1,
+                    let pair = match r.options.indirect_opts.filter {
+                        VplFilter::Texel => gather::pair,
+                        VplFilter::Bilinear => gather::pair_bilinear,
                     };
-                    visibility(&cls, r.options.indirect_opts.filter, s.p, s.tri, cls.locate(s.p))
+                    sum += v.intensity * pair(&self.consts[k], map.texels(), s.p, s.ns, s.ng);
                 }
                 None => {
                     let ray = spawn_ray_to(s.p, s.p_err, s.ng, v.position);
-                    if r.tracer.occluded(&ray, RayKind::VplShadow, counts) { 0.0 } else { 1.0 }
+                    if !r.tracer.occluded(&ray, RayKind::VplShadow, counts) {
+                        sum += v.intensity * g;
+                    }
                 }
-            };
-            if visible > 0.0 {
-                sum += v.intensity * (g * visible);
             }
         }
         kd * FRAC_1_PI * sum * stride as f32
@@ -294,7 +291,7 @@ pub fn run(
     let mut irr = vec![Vec3::ZERO; n];
 
     const BAND: usize = 4;
-    let (bias, filter) = (r.options.indirect_opts.bias, r.options.indirect_opts.filter);
+    let filter = r.options.indirect_opts.filter;
     let counts: Vec<RayCounts> = irr
         .par_chunks_mut(w * BAND)
         .enumerate()
@@ -316,31 +313,48 @@ pub fn run(
                     r.pixel_rays.add(i, &before, &c);
                 }
             } else {
-                let mut located = Vec::with_capacity(irr.len());
-                for (vi, (vpl, map)) in v.vpls.iter().zip(v.maps).enumerate() {
-                    let cls = Classifier { map, planes: v.planes, bias, point_error: r.occluders().1 };
-                    located.clear();
-                    // The band's pixels of this VPL's subset: every k-th column of every k-th
-                    // row (all of them without interleaving).
+                // The band's points of each VPL subset (all of them without interleaving), in
+                // struct-of-arrays order, and their sums.
+                let (y0, rows) = (first / w, irr.len() / w);
+                let groups: Vec<(Vec<usize>, Points)> = (0..k * k)
+                    .map(|q| {
+                        let (mut idx, mut p) = (Vec::new(), Points::default());
+                        for row in (0..rows).filter(|row| (y0 + row) % k == q / k) {
+                            for j in (q % k..w).step_by(k).map(|x| row * w + x) {
+                                if let Some((s, _)) = &pts[first + j] {
+                                    idx.push(j);
+                                    p.push(s);
+                                }
+                            }
+                        }
+                        p.pad();
+                        (idx, p)
+                    })
+                    .collect();
+                let mut sums: Vec<Sums> = groups
+                    .iter()
+                    .map(|(_, p)| {
+                        let mut s = Sums::default();
+                        s.reset(p.len());
+                        s
+                    })
+                    .collect();
+                for (vi, (consts, map)) in v.consts.iter().zip(v.maps).enumerate() {
                     let q = vi % (k * k);
-                    let (y0, rows) = (first / w, irr.len() / w);
-                    let mine = (0..rows)
-                        .filter(|r| (y0 + r) % k == q / k)
-                        .flat_map(|r| (q % k..w).step_by(k).map(move |x| r * w + x));
-                    for j in mine {
-                        let Some((s, _)) = &pts[first + j] else { continue };
-                        if let Some(g) = v.geometry(s, vpl) {
-                            let c = cls.locate(s.p);
-                            cls.prefetch(c);
-                            located.push((j, g, c));
-                        }
+                    match filter {
+                        VplFilter::Texel => gather::add_vpl(consts, map.texels(), &groups[q].1, &mut sums[q]),
+                        VplFilter::Bilinear => gather::add_vpl_with(
+                            gather::pair_bilinear,
+                            consts,
+                            map.texels(),
+                            &groups[q].1,
+                            &mut sums[q],
+                        ),
                     }
-                    for &(j, g, c) in &located {
-                        let s = &pts[first + j].as_ref().expect("located points have a hit").0;
-                        let visible = visibility(&cls, filter, s.p, s.tri, c);
-                        if visible > 0.0 {
-                            irr[j] += vpl.intensity * (g * visible);
-                        }
+                }
+                for ((idx, _), sums) in groups.iter().zip(&sums) {
+                    for (n, &j) in idx.iter().enumerate() {
+                        irr[j] = sums.get(n);
                     }
                 }
             }
@@ -358,28 +372,6 @@ pub fn run(
         }
     });
     counts.into_iter().sum()
-}
-
-/// The visibility of a VPL from point `p` of triangle `own` (located at `c` in the VPL's map)
-/// under `filter`: 0 or 1 for [`VplFilter::Texel`], a fraction for [`VplFilter::Bilinear`].
-#[inline]
-fn visibility(
-    cls: &Classifier,
-    filter: VplFilter,
-    p: Vec3,
-    own: u32,
-    c: hyrt_shadowmap::map::MapCoord,
-) -> f32 {
-    match filter {
-        VplFilter::Texel => {
-            if cls.visible_at(p, own, c) {
-                1.0
-            } else {
-                0.0
-            }
-        }
-        VplFilter::Bilinear => cls.visibility_at(p, own, c),
-    }
 }
 
 /// The geometry-aware `k x k` box filter of interleaved sampling (see [`run`]), on the

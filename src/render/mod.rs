@@ -16,6 +16,7 @@
 
 pub mod cull;
 pub mod direct;
+mod gather;
 pub mod indirect;
 pub mod pass;
 mod pixel_rays;

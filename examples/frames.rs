@@ -34,8 +34,11 @@ fn main() {
     }
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<u32>().ok());
     if let Some(n) = env("HYRT_VPLS") {
-        opts.indirect =
-            if env("HYRT_VPL_RAYS") == Some(1) { hyrt::render::Indirect::Rays } else { hyrt::render::Indirect::Maps };
+        opts.indirect = if env("HYRT_VPL_RAYS") == Some(1) {
+            hyrt::render::Indirect::Rays
+        } else {
+            hyrt::render::Indirect::Maps
+        };
         opts.indirect_opts.vpl.paths = n;
     }
     if let Some(res) = env("HYRT_VPL_RES") {

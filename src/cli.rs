@@ -140,8 +140,12 @@ pub struct Knobs {
     /// Resolution of each VPL's paraboloid map.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub vpl_map_res: Option<u32>,
-    /// How a VPL map decides visibility: the `texel` under the point (the thesis), or
-    /// `bilinear` over the 2x2 texels around it (percentage-closer filtering; the default).
+    /// VPL maps: tessellate triangles until projected edges are at most T texels (`inf`: no
+    /// tessellation), as `--tess` for the light maps.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub vpl_tess: Option<f32>,
+    /// How a VPL map decides visibility: the `texel` under the point (the thesis; the
+    /// default), or `bilinear` over the 2x2 texels around it (percentage-closer filtering).
     #[arg(long, value_enum)]
     pub vpl_filter: Option<VplFilterArg>,
     /// Also cast a shadow ray for every map decision and count those it contradicts
@@ -258,6 +262,12 @@ impl Knobs {
         if let Some(n) = self.vpl_map_res {
             io.map.resolution = n;
         }
+        if let Some(t) = self.vpl_tess {
+            if t.is_nan() || t <= 0.0 {
+                bail!("--vpl-tess must be > 0 (or inf), got {t}");
+            }
+            io.map.tess_texels = t;
+        }
         if let Some(k) = self.interleave {
             io.interleave = k;
         }
@@ -305,6 +315,7 @@ pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
         "vpl_seed": o.indirect_opts.vpl.seed,
         "vpl_clamp": o.indirect_opts.clamp,
         "vpl_map_res": o.indirect_opts.map.resolution,
+        "vpl_tess": if o.indirect_opts.map.tess_texels.is_finite() { serde_json::json!(o.indirect_opts.map.tess_texels) } else { serde_json::json!("inf") },
         "vpl_bias": o.indirect_opts.bias,
         "vpl_filter": o.indirect_opts.filter.name(),
         "interleave": o.indirect_opts.interleave,

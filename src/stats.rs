@@ -32,6 +32,8 @@ pub struct RenderStats<'a> {
     /// With indirect light: the VPLs and the memory of their maps.
     pub vpls: u32,
     pub vpl_map_bytes: u64,
+    /// (diffuse camera point, VPL) pairs of the indirect pass.
+    pub vpl_pairs: u64,
     /// With `--visibility raster`: what the rasterizer processed (`Renderer::raster_stats`):
     /// triangles `submitted` after the cluster culling, `set_up` (kept for drawing), `tiny`
     /// (of those, pixel bounds of at most 2x2) and `bin_entries` ((triangle, tile) pairs).
@@ -76,6 +78,7 @@ impl<'a> RenderStats<'a> {
             maps_built: frame.maps_built,
             vpls: frame.vpls,
             vpl_map_bytes: frame.vpl_map_bytes,
+            vpl_pairs: frame.vpl_pairs,
             rays: serde_json::json!({
                 "primary": r.primary,
                 "shadow": r.shadow,

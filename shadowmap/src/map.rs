@@ -39,7 +39,8 @@
 //! # Near plane and input
 //!
 //! The near distance is `2^-20` ([`NEAR_FRACTION`]) times the distance from the light to the
-//! farthest vertex of the usable triangles (1 if there are none): relative to the scene, so that
+//! farthest vertex of the usable triangles (1 if there are none; for a single hemisphere, of the
+//! usable triangles with a vertex in front of it): relative to the scene, so that
 //! geometry very close to the light is still drawn, and a power of two so the scale is exact.
 //! Surfaces closer than that to the light are clipped away.
 //!
@@ -369,7 +370,7 @@ impl LightMap {
         let count = layout.face_count();
         let drawn: Vec<bool> = (0..count).map(|i| faces.get(i).copied().unwrap_or(false)).collect();
         let (valid, near) =
-            if drawn.iter().any(|&d| d) { usable_triangles(tris, light) } else { (Vec::new(), 1.0) };
+            if drawn.iter().any(|&d| d) { usable_triangles(tris, light, layout) } else { (Vec::new(), 1.0) };
         let mut map = LightMap {
             layout,
             resolution,
@@ -769,9 +770,17 @@ pub(crate) fn nearest_in_disc(res: u32, x: f32, y: f32) -> Option<(u32, u32)> {
 }
 
 /// The indices of the triangles that can be drawn (module docs) and the near distance.
-fn usable_triangles(tris: &[[Vec3; 3]], light: Vec3) -> (Vec<u32>, f32) {
+///
+/// For a single hemisphere, triangles with no vertex strictly in front of it are left out
+/// first, by the very test (and arithmetic) the tessellator would drop them with: the cheap
+/// test saves the usability test's distances for half of the scene.
+fn usable_triangles(tris: &[[Vec3; 3]], light: Vec3, layout: Layout) -> (Vec<u32>, f32) {
     let tris = &tris[..tris.len().min(EMPTY_ID as usize)];
     let l = light.as_dvec3();
+    let front = |t: &[Vec3; 3]| match layout {
+        Layout::Hemisphere(f) => t.iter().any(|p| f.to_map(p.as_dvec3() - l).z > 0.0),
+        _ => true,
+    };
     let parts: Vec<(Vec<u32>, f64)> = tris
         .par_chunks(CHUNK)
         .enumerate()
@@ -779,7 +788,7 @@ fn usable_triangles(tris: &[[Vec3; 3]], light: Vec3) -> (Vec<u32>, f32) {
             let mut ids = Vec::with_capacity(chunk.len());
             let mut far = 0.0f64;
             for (k, t) in chunk.iter().enumerate() {
-                if let Some(r) = usable(t, l) {
+                if let Some(r) = front(t).then(|| usable(t, l)).flatten() {
                     ids.push((c * CHUNK + k) as u32);
                     far = far.max(r);
                 }
@@ -813,8 +822,13 @@ fn usable(t: &[Vec3; 3], l: DVec3) -> Option<f64> {
     // Distance from the light to the triangle's plane, against the edge-on thresholds.
     let h = n.dot(d[0]).abs() / len;
     let edge_on_abs = far * 2f64.powi(-40);
-    let edge_on_rel = dist_triangle(d[0], d[1], d[2]) * 2f64.powi(-20);
-    (h > edge_on_abs && h > edge_on_rel).then_some(far)
+    // The distance to the triangle is at most the nearest vertex's: when `h` clears the
+    // threshold with that distance, it clears it with the exact one, which is then not needed
+    // (it is for few triangles, and it is the costly part of this test).
+    let near_vertex = d.iter().map(|x| x.length()).fold(f64::INFINITY, f64::min);
+    let rel = 2f64.powi(-20);
+    let edge_on_rel = |h: f64| h > near_vertex * rel || h > dist_triangle(d[0], d[1], d[2]) * rel;
+    (h > edge_on_abs && edge_on_rel(h)).then_some(far)
 }
 
 /// Clip-space triangles and ids of each drawn cube face (module docs), in input order: one pass

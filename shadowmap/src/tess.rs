@@ -138,6 +138,8 @@ pub(crate) struct Params {
     /// `resolution / (2 * tess_texels)`: an edge of length `L` at distance `>= dist` needs
     /// `L / dist * k` subdivisions (module docs). 0 without tessellation.
     pub k: f64,
+    /// Texels per side.
+    pub res: f32,
 }
 
 impl Params {
@@ -151,7 +153,30 @@ impl Params {
         } else {
             f64::INFINITY
         };
-        Params { near, k }
+        Params { near, k, res: resolution as f32 }
+    }
+
+    /// Whether the projected triangle `c` (clip space, `w > 0`) certainly covers no texel
+    /// centre: its bounding box, widened by 1/64 texel (far more than the rasterizer's snapping
+    /// to 1/256 texel and the rounding of `x / w`), holds no centre `k + 1/2` along `x` or `y`.
+    ///
+    /// Why: at the small resolutions of VPL maps most triangles of a large scene fall between
+    /// the texel centres; dropping them here spares storing, setting up and binning them.
+    #[inline]
+    pub fn misses_centres(&self, c: &[Vec4; 3]) -> bool {
+        let half = self.res * 0.5;
+        let x = c.map(|v| (v.x / v.w + 1.0) * half);
+        let y = c.map(|v| (1.0 - v.y / v.w) * half);
+        let none = |v: [f32; 3]| {
+            let (lo, hi) = (v[0].min(v[1]).min(v[2]) - 1.0 / 64.0, v[0].max(v[1]).max(v[2]) + 1.0 / 64.0);
+            // The first centre at or above `lo` lies above `hi`. (A ceiling by truncation: the
+            // front hemisphere's coordinates lie within the map, far inside the i32 range.)
+            let t = lo - 0.5;
+            let c = t as i32 as f32;
+            let c = if c < t { c + 1.0 } else { c };
+            c + 0.5 > hi
+        };
+        none(x) || none(y)
     }
 
     /// Subdivisions for a segment or triangle of longest edge `len`, at distance `>= dist` from
@@ -295,11 +320,19 @@ impl Tessellator {
             // Fast path (module docs): no clipping, and every point at least rmin - lmax from
             // the light, far enough for n = 1 (ignoring the 1 / (1 + cos) gain); with a margin so
             // that rounding cannot make a neighbour's general path split a shared edge.
-            let rmin = p[0].length().min(p[1].length()).min(p[2].length());
-            let lmax = (p[1] - p[0]).length().max((p[2] - p[1]).length()).max((p[0] - p[2]).length());
-            if lmax * prm.k * 1.001 <= rmin - lmax {
-                self.tris.push(p.map(|q| project(q, prm.near)));
-                self.ids.push(id);
+            // `lmax k 1.001 <= rmin - lmax`, squared (both sides are lengths): no square roots.
+            let rmin2 = p[0].length_squared().min(p[1].length_squared()).min(p[2].length_squared());
+            let lmax2 = (p[1] - p[0])
+                .length_squared()
+                .max((p[2] - p[1]).length_squared())
+                .max((p[0] - p[2]).length_squared());
+            let grow = 1.0 + prm.k * 1.001;
+            if lmax2 * grow * grow <= rmin2 {
+                let c = p.map(|q| project(q, prm.near));
+                if !prm.misses_centres(&c) {
+                    self.tris.push(c);
+                    self.ids.push(id);
+                }
                 return;
             }
         }

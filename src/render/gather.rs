@@ -30,6 +30,12 @@ pub(crate) struct Points {
 }
 
 impl Points {
+    /// Empty, with room for `n` points.
+    pub fn with_capacity(n: usize) -> Self {
+        let v = || [Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n)];
+        Self { p: v(), ns: v(), ng: v() }
+    }
+
     pub fn push(&mut self, s: &SurfaceHit) {
         self.push_raw(s.p, s.ns, s.ng);
     }
@@ -130,14 +136,18 @@ pub(crate) fn pair(c: &VplConsts, texels: &[[f32; 3]], p: Vec3, ns: Vec3, ng: Ve
     if !(cos_x > 0.0 && cos_g > 0.0 && cos_v > 0.0) {
         return 0.0;
     }
-    let g = cos_x * cos_v / d2.max(c.clamp2);
+    // One division for both `1 / max(d^2, d_min^2)` and the rounding band's `1 / cos_g`.
+    let m2 = d2.max(c.clamp2);
+    let q = 1.0 / (cos_g * m2);
+    let g = cos_x * cos_v * cos_g * q;
     let den = 1.0 + cos_v;
-    let u = (c.t.x * w.x + c.t.y * w.y + c.t.z * w.z) / den;
-    let v = (c.b.x * w.x + c.b.y * w.y + c.b.z * w.z) / den;
+    let iden = 1.0 / den;
+    let u = (c.t.x * w.x + c.t.y * w.y + c.t.z * w.z) * iden;
+    let v = (c.b.x * w.x + c.b.y * w.y + c.b.z * w.z) * iden;
     let x = ((u + 1.0) * c.half).max(0.0).min(c.last) as u32;
     let y = ((1.0 - v) * c.half).max(0.0).min(c.last) as u32;
     let m = texels[(y * c.res + x) as usize];
-    let margin = c.bias_k * den * r + PLANE_TOLERANCE * r + (c.e + c.e / cos_g);
+    let margin = c.bias_k * den * r + PLANE_TOLERANCE * r + (c.e + c.e * m2 * q);
     if PlaneMap::occluded(m, w, r, margin) { 0.0 } else { g }
 }
 
@@ -268,10 +278,13 @@ mod avx2 {
             if _mm256_movemask_ps(faces) == 0 {
                 continue;
             }
-            let g = _mm256_div_ps(_mm256_mul_ps(cos_x, cos_v), _mm256_max_ps(d2, clamp2));
+            let m2 = _mm256_max_ps(d2, clamp2);
+            let q = _mm256_div_ps(one, _mm256_mul_ps(cos_g, m2));
+            let g = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(cos_x, cos_v), cos_g), q);
             let den = _mm256_add_ps(one, cos_v);
-            let u = _mm256_div_ps(dot(wx, wy, wz, tx, ty, tz), den);
-            let v = _mm256_div_ps(dot(wx, wy, wz, bx, by, bz), den);
+            let iden = _mm256_div_ps(one, den);
+            let u = _mm256_mul_ps(dot(wx, wy, wz, tx, ty, tz), iden);
+            let v = _mm256_mul_ps(dot(wx, wy, wz, bx, by, bz), iden);
             // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
             let fx = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(u, one), half), zero), last);
             let fy = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(one, v), half), zero), last);
@@ -290,7 +303,7 @@ mod avx2 {
             let sdot = dot(wx, wy, wz, gx, gy, gz);
             let margin = _mm256_add_ps(
                 _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(bias_k, den), r), _mm256_mul_ps(tol, r)),
-                _mm256_add_ps(e, _mm256_div_ps(e, cos_g)),
+                _mm256_add_ps(e, _mm256_mul_ps(_mm256_mul_ps(e, m2), q)),
             );
             let hidden = _mm256_and_ps(
                 _mm256_cmp_ps::<_CMP_GT_OQ>(sdot, zero),

@@ -72,7 +72,7 @@ impl Default for IndirectOptions {
         Self {
             vpl: vpl::VplOptions::default(),
             clamp: 0.01,
-            map: MapOptions { resolution: 1536, ..MapOptions::default() },
+            map: MapOptions { resolution: 256, tess_texels: 16.0, ..MapOptions::default() },
             bias: 0.5,
             interleave: 1,
             filter: VplFilter::default(),
@@ -144,8 +144,9 @@ impl Renderer<'_> {
             self.vpl_cache.maps.get_or_init(|| {
                 fresh = true;
                 let planes = self.occluders().0;
-                // One VPL map after another: each build is parallel inside.
-                vpls.iter()
+                // Maps in parallel as well as inside each build: a small map's build has too
+                // little work per parallel step to keep both cores busy alone.
+                vpls.par_iter()
                     .map(|v| PlaneMap::build(&self.scene.positions, planes, v.position, v.normal, &opts.map))
                     .collect()
             })
@@ -240,6 +241,49 @@ impl Vpls<'_> {
         kd * FRAC_1_PI * sum * stride as f32
     }
 
+    /// Whether [`Vpls::at_subsets`] applies: maps looked up by texel.
+    pub(crate) fn batched(&self, r: &Renderer) -> bool {
+        !self.maps.is_empty() && r.options.indirect_opts.filter == VplFilter::Texel
+    }
+
+    /// [`Vpls::at_subset`] of many points at once (when [`Vpls::batched`]), point `j` over the
+    /// VPLs `subsets[j], subsets[j] + stride, ...`: the same values to the bit, computed VPL by
+    /// VPL with the vector kernel.
+    pub(crate) fn at_subsets(
+        &self,
+        r: &Renderer,
+        hits: &[SurfaceHit],
+        subsets: &[usize],
+        stride: usize,
+    ) -> Vec<Vec3> {
+        let stride = stride.max(1);
+        let kd = |s: &SurfaceHit| r.scene.materials[r.scene.material[s.tri as usize] as usize].diffuse;
+        // The diffuse points of each subset.
+        let mut groups: Vec<(Vec<usize>, Points)> = vec![Default::default(); stride];
+        for (j, (s, &q)) in hits.iter().zip(subsets).enumerate() {
+            if kd(s) != Vec3::ZERO {
+                groups[q % stride].0.push(j);
+                groups[q % stride].1.push(s);
+            }
+        }
+        let mut out = vec![Vec3::ZERO; hits.len()];
+        for (q, (idx, pts)) in groups.iter_mut().enumerate() {
+            if idx.is_empty() {
+                continue;
+            }
+            pts.pad();
+            let mut sums = Sums::default();
+            sums.reset(pts.len());
+            for vi in (q..self.vpls.len()).step_by(stride) {
+                gather::add_vpl(&self.consts[vi], self.maps[vi].texels(), pts, &mut sums);
+            }
+            for (m, &j) in idx.iter().enumerate() {
+                out[j] = kd(&hits[j]) * FRAC_1_PI * sums.get(m) * stride as f32;
+            }
+        }
+        out
+    }
+
     /// The VPL subset of pixel `i` of a `width`-wide image under `k x k` interleaving, and the
     /// stride between its VPLs (`k^2`).
     pub fn subset_of(i: usize, width: usize, k: usize) -> (usize, usize) {
@@ -271,124 +315,127 @@ pub fn run(
     gbuffer: &[Option<Hit>],
     out: &mut [Vec3],
     progress: Progress,
-) -> RayCounts {
+) -> (RayCounts, u64) {
     let w = r.scene.settings.width.max(1) as usize;
     let k = r.options.indirect_opts.interleave.max(1) as usize;
     let n = out.len();
-    // Per pixel: the shading point and Kd (diffuse hits only), and the VPL sum.
-    let mut pts: Vec<Option<(SurfaceHit, Vec3)>> = Vec::with_capacity(n);
-    (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let h = gbuffer[i].as_ref()?;
-            let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
-            let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
-            (kd != Vec3::ZERO).then(|| (SurfaceHit::new(r.scene, h, dir), kd))
-        })
-        .collect_into_vec(&mut pts);
     let takes = |i: usize, vpl: usize| k == 1 || vpl % (k * k) == Vpls::subset_of(i, w, k).0;
-    let scale = (k * k) as f32;
+    // Per pixel: the VPL sum, and what the interleaving filter compares (the shading normal
+    // and the camera distance; distance 0 where the pixel has no diffuse point).
     let mut irr = vec![Vec3::ZERO; n];
+    let mut geo = vec![[0f32; 4]; n];
+    // The shading point of pixel `i`, if it is diffuse.
+    let diffuse = |i: usize| {
+        let h = gbuffer[i].as_ref()?;
+        let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
+        let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
+        (kd != Vec3::ZERO).then(|| SurfaceHit::new(r.scene, h, dir))
+    };
 
-    const BAND: usize = 4;
+    // Rows per parallel job: with interleaving, each of the k^2 subsets gets a row or more.
+    let band = 4usize.max(k);
     let filter = r.options.indirect_opts.filter;
-    let counts: Vec<RayCounts> = irr
-        .par_chunks_mut(w * BAND)
+    let counts: Vec<(RayCounts, u64)> = irr
+        .par_chunks_mut(w * band)
+        .zip(geo.par_chunks_mut(w * band))
         .enumerate()
-        .map(|(b, irr)| {
-            let first = b * w * BAND;
+        .map(|(b, (irr, geo))| {
+            let first = b * w * band;
             let mut c = RayCounts::default();
-            if v.maps.is_empty() {
-                for (j, acc) in irr.iter_mut().enumerate() {
-                    let i = first + j;
-                    let Some((s, _)) = &pts[i] else { continue };
-                    let before = c;
-                    for (_, vpl) in v.vpls.iter().enumerate().filter(|(vi, _)| takes(i, *vi)) {
-                        let Some(g) = v.geometry(s, vpl) else { continue };
-                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, vpl.position);
-                        if !r.tracer.occluded(&ray, RayKind::VplShadow, &mut c) {
-                            *acc += vpl.intensity * g;
-                        }
-                    }
-                    r.pixel_rays.add(i, &before, &c);
+            let mut pairs = 0u64;
+            // The band's points of each VPL subset (all of them without interleaving), in
+            // struct-of-arrays order, with their pixels.
+            let room = if v.maps.is_empty() { 0 } else { irr.len() / (k * k) + gather::LANES };
+            let mut groups: Vec<(Vec<usize>, Points)> =
+                (0..k * k).map(|_| (Vec::with_capacity(room), Points::with_capacity(room))).collect();
+            for (j, (acc, geo)) in irr.iter_mut().zip(geo.iter_mut()).enumerate() {
+                let i = first + j;
+                let Some(s) = diffuse(i) else { continue };
+                *geo = [s.ns.x, s.ns.y, s.ns.z, s.t];
+                if !v.maps.is_empty() {
+                    let (group, points) = &mut groups[Vpls::subset_of(i, w, k).0];
+                    group.push(j);
+                    points.push(&s);
+                    continue;
                 }
-            } else {
-                // The band's points of each VPL subset (all of them without interleaving), in
-                // struct-of-arrays order, and their sums.
-                let (y0, rows) = (first / w, irr.len() / w);
-                let groups: Vec<(Vec<usize>, Points)> = (0..k * k)
-                    .map(|q| {
-                        let (mut idx, mut p) = (Vec::new(), Points::default());
-                        for row in (0..rows).filter(|row| (y0 + row) % k == q / k) {
-                            for j in (q % k..w).step_by(k).map(|x| row * w + x) {
-                                if let Some((s, _)) = &pts[first + j] {
-                                    idx.push(j);
-                                    p.push(s);
-                                }
-                            }
-                        }
-                        p.pad();
-                        (idx, p)
-                    })
-                    .collect();
+                let before = c;
+                for (_, vpl) in v.vpls.iter().enumerate().filter(|(vi, _)| takes(i, *vi)) {
+                    pairs += 1;
+                    let Some(g) = v.geometry(&s, vpl) else { continue };
+                    let ray = spawn_ray_to(s.p, s.p_err, s.ng, vpl.position);
+                    if !r.tracer.occluded(&ray, RayKind::VplShadow, &mut c) {
+                        *acc += vpl.intensity * g;
+                    }
+                }
+                r.pixel_rays.add(i, &before, &c);
+            }
+            if !v.maps.is_empty() {
                 let mut sums: Vec<Sums> = groups
-                    .iter()
+                    .iter_mut()
                     .map(|(_, p)| {
+                        p.pad();
                         let mut s = Sums::default();
                         s.reset(p.len());
                         s
                     })
                     .collect();
                 for (vi, (consts, map)) in v.consts.iter().zip(v.maps).enumerate() {
-                    let q = vi % (k * k);
+                    let (q, sums) = (vi % (k * k), &mut sums[vi % (k * k)]);
+                    pairs += groups[q].0.len() as u64;
                     match filter {
-                        VplFilter::Texel => gather::add_vpl(consts, map.texels(), &groups[q].1, &mut sums[q]),
+                        VplFilter::Texel => gather::add_vpl(consts, map.texels(), &groups[q].1, sums),
                         VplFilter::Bilinear => gather::add_vpl_with(
                             gather::pair_bilinear,
                             consts,
                             map.texels(),
                             &groups[q].1,
-                            &mut sums[q],
+                            sums,
                         ),
                     }
                 }
-                for ((idx, _), sums) in groups.iter().zip(&sums) {
-                    for (n, &j) in idx.iter().enumerate() {
-                        irr[j] = sums.get(n);
+                for ((group, _), sums) in groups.iter().zip(&sums) {
+                    for (m, &j) in group.iter().enumerate() {
+                        irr[j] = sums.get(m);
                     }
                 }
             }
             for _ in 0..irr.len() / w {
                 progress();
             }
-            c
+            (c, pairs)
         })
         .collect();
 
-    let filtered = if k > 1 { interleave_filter(&irr, &pts, w, k, scale) } else { irr };
-    out.par_iter_mut().zip(&pts).zip(filtered).for_each(|((o, pt), e)| {
-        if let Some((_, kd)) = pt {
-            *o = *kd * FRAC_1_PI * e;
+    let filtered = if k > 1 { interleave_filter(&irr, &geo, w, k) } else { irr };
+    out.par_iter_mut().zip(filtered).enumerate().for_each(|(i, (o, e))| {
+        if let Some(h) = &gbuffer[i] {
+            let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
+            if kd != Vec3::ZERO {
+                *o = kd * FRAC_1_PI * e;
+            }
         }
     });
-    counts.into_iter().sum()
+    counts.into_iter().fold((RayCounts::default(), 0), |(mut c, n), (d, m)| {
+        c += d;
+        (c, n + m)
+    })
 }
 
 /// The geometry-aware `k x k` box filter of interleaved sampling (see [`run`]), on the
-/// per-pixel sums `irr` of `k^2`-strided VPL subsets, each scaled by `scale = k^2`.
-fn interleave_filter(
-    irr: &[Vec3],
-    pts: &[Option<(SurfaceHit, Vec3)>],
-    w: usize,
-    k: usize,
-    scale: f32,
-) -> Vec<Vec3> {
+/// per-pixel sums `irr` of `k^2`-strided VPL subsets; `geo` holds each pixel's shading normal
+/// and camera distance (0: no diffuse point).
+fn interleave_filter(irr: &[Vec3], geo: &[[f32; 4]], w: usize, k: usize) -> Vec<Vec3> {
     let h = irr.len() / w;
     let lo = k / 2;
+    let scale = (k * k) as f32;
     (0..irr.len())
         .into_par_iter()
         .map(|i| {
-            let Some((s, _)) = &pts[i] else { return Vec3::ZERO };
+            let [nx, ny, nz, t] = geo[i];
+            if t == 0.0 {
+                return Vec3::ZERO;
+            }
+            let ns = Vec3::new(nx, ny, nz);
             let (x, y) = (i % w, i / w);
             let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
             // A window of k consecutive columns and rows holds every residue once; near the
@@ -398,8 +445,8 @@ fn interleave_filter(
             for yy in y0..(y0 + k).min(h) {
                 for xx in x0..(x0 + k).min(w) {
                     let j = yy * w + xx;
-                    let Some((t, _)) = &pts[j] else { continue };
-                    if s.ns.dot(t.ns) >= 0.9 && (s.t - t.t).abs() <= 0.05 * s.t {
+                    let [mx, my, mz, u] = geo[j];
+                    if u != 0.0 && ns.dot(Vec3::new(mx, my, mz)) >= 0.9 && (t - u).abs() <= 0.05 * t {
                         sum += irr[j];
                         weight += 1.0;
                     }
@@ -410,4 +457,47 @@ fn interleave_filter(
             sum * (scale / weight)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::Options;
+
+    /// The batched gather of mirror hits gives what one hit at a time gives, to the bit, with
+    /// and without interleaving.
+    #[test]
+    fn batched_points_match_one_at_a_time() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        (scene.settings.width, scene.settings.height) = (48, 36);
+        let mut o = Options::hybrid();
+        o.indirect = Indirect::Maps;
+        o.indirect_opts.map.resolution = 64;
+        let r = Renderer::new(&scene, o);
+        let v = r.vpls(&mut FrameStats::default());
+        assert!(v.batched(&r) && v.vpls.len() > 10);
+        let (gbuffer, _) = r.visibility();
+        let w = scene.settings.width as usize;
+        let hits: Vec<SurfaceHit> = gbuffer
+            .iter()
+            .enumerate()
+            .filter_map(|(i, h)| {
+                Some(SurfaceHit::new(&scene, h.as_ref()?, r.camera_ray((i % w) as u32, (i / w) as u32).dir))
+            })
+            .collect();
+        for stride in [1, 4] {
+            let subsets: Vec<usize> = (0..hits.len()).map(|j| j % stride).collect();
+            let batch = v.at_subsets(&r, &hits, &subsets, stride);
+            let mut counts = RayCounts::default();
+            let one: Vec<Vec3> =
+                hits.iter().zip(&subsets).map(|(s, &q)| v.at_subset(&r, s, q, stride, &mut counts)).collect();
+            assert!(
+                batch
+                    .iter()
+                    .zip(&one)
+                    .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits))
+            );
+            assert!(one.iter().filter(|v| **v != Vec3::ZERO).count() > hits.len() / 2);
+        }
+    }
 }

@@ -202,6 +202,9 @@ pub struct FrameStats {
     /// With indirect light: the number of VPLs and the memory of their maps.
     pub vpls: u32,
     pub vpl_map_bytes: u64,
+    /// (diffuse camera point, VPL) pairs the indirect pass evaluated (each pixel's VPL subset
+    /// under interleaving; mirror hits not included): the unit of its cost per pair.
+    pub vpl_pairs: u64,
     /// Milliseconds per pass ([`Pass::name`]), plus `total` for the frame (scene preparation
     /// excluded).
     pub time_ms: BTreeMap<&'static str, f64>,
@@ -445,7 +448,9 @@ impl<'a> Renderer<'a> {
         let vpls = self.plan.runs(Pass::Indirect).then(|| self.vpls(&mut stats));
         if let Some(v) = &vpls {
             let t = Instant::now();
-            stats.rays += indirect::run(self, v, &gbuffer, &mut indirect, progress);
+            let (rays, pairs) = indirect::run(self, v, &gbuffer, &mut indirect, progress);
+            stats.rays += rays;
+            stats.vpl_pairs = pairs;
             stats.record(Pass::Indirect, t);
         }
 

@@ -84,10 +84,20 @@ pub fn run(
             .par_chunks_mut(256)
             .map(|chunk| {
                 let mut c = RayCounts::default();
-                for p in chunk.iter_mut() {
+                // Indirect light at the chunk's hits together: VPL by VPL, with the vector
+                // kernel (the same values as one hit at a time).
+                let batched = vpls.filter(|v| v.batched(r)).map(|v| {
+                    let hits: Vec<SurfaceHit> = chunk.iter().map(|p| p.hit).collect();
+                    let subsets: Vec<usize> =
+                        chunk.iter().map(|p| Vpls::subset_of(p.pixel as usize, w, k).0).collect();
+                    v.at_subsets(r, &hits, &subsets, k * k)
+                });
+                for (n, p) in chunk.iter_mut().enumerate() {
                     let before = c;
                     p.sum += p.weight * direct::shade_point(r, &p.hit, shadowing, &mut c);
-                    if let Some(v) = vpls {
+                    if let Some(ind) = &batched {
+                        p.sum += p.weight * ind[n];
+                    } else if let Some(v) = vpls {
                         let (subset, stride) = Vpls::subset_of(p.pixel as usize, w, k);
                         p.sum += p.weight * v.at_subset(r, &p.hit, subset, stride, &mut c);
                     }

@@ -7,7 +7,7 @@ use std::{
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
-use hyrt_shadowmap::MapKind;
+use hyrt_shadowmap::{MapKind, vpl_map::VplFormat};
 
 use crate::{
     metrics, output,
@@ -148,6 +148,10 @@ pub struct Knobs {
     /// default), or `bilinear` over the 2x2 texels around it (percentage-closer filtering).
     #[arg(long, value_enum)]
     pub vpl_filter: Option<VplFilterArg>,
+    /// What a VPL map's texels hold: the occluder's `planes` (12 bytes a texel) or its
+    /// distance as a 16-bit float, `depth16` (2 bytes; the default).
+    #[arg(long, value_enum)]
+    pub vpl_format: Option<VplFormatArg>,
     /// Also cast a shadow ray for every map decision and count those it contradicts
     /// (wrong-visibility pixels, in the stats; these rays are not counted as frame rays).
     #[arg(long)]
@@ -271,6 +275,12 @@ impl Knobs {
         if let Some(k) = self.interleave {
             io.interleave = k;
         }
+        if let Some(f) = self.vpl_format {
+            io.format = match f {
+                VplFormatArg::Planes => VplFormat::Planes,
+                VplFormatArg::Depth16 => VplFormat::Depth16,
+            };
+        }
         if let Some(f) = self.vpl_filter {
             io.filter = match f {
                 VplFilterArg::Texel => VplFilter::Texel,
@@ -318,6 +328,7 @@ pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
         "vpl_tess": if o.indirect_opts.map.tess_texels.is_finite() { serde_json::json!(o.indirect_opts.map.tess_texels) } else { serde_json::json!("inf") },
         "vpl_bias": o.indirect_opts.bias,
         "vpl_filter": o.indirect_opts.filter.name(),
+        "vpl_format": o.indirect_opts.format.name(),
         "interleave": o.indirect_opts.interleave,
         "max_depth": max_depth,
     })
@@ -327,6 +338,12 @@ pub fn options_json(o: &Options, max_depth: u32) -> serde_json::Value {
 pub enum VplFilterArg {
     Texel,
     Bilinear,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum VplFormatArg {
+    Planes,
+    Depth16,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

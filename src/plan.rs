@@ -170,9 +170,13 @@ impl Plan {
                 true,
                 Pass::Indirect,
                 format!(
-                    "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map per VPL (built once)",
+                    "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map of {} per VPL (built once)",
                     io.vpl.paths,
                     io.vpl.bounces,
+                    match io.format {
+                        hyrt_shadowmap::vpl_map::VplFormat::Planes => "planes",
+                        hyrt_shadowmap::vpl_map::VplFormat::Depth16 => "16-bit depths",
+                    },
                     n = io.map.resolution
                 ),
             ),

@@ -21,7 +21,7 @@ use hyrt::{
 use hyrt_shadowmap::{
     LightMap,
     border::{LIT, NONE, SHADOW},
-    plane_map::PlaneMap,
+    vpl_map::VplMap,
 };
 use hyrt_tracer::RayCounts;
 
@@ -208,8 +208,8 @@ pub fn depth_face_image(map: &LightMap, face: u8, max_side: u32, range: (f32, f3
     }))
 }
 
-/// A VPL's plane map as [`depth_face_image`] shows a light map's face.
-pub fn plane_map_image(map: &PlaneMap, max_side: u32, range: (f32, f32)) -> ColorImage {
+/// A VPL's map as [`depth_face_image`] shows a light map's face.
+pub fn vpl_map_image(map: &VplMap, max_side: u32, range: (f32, f32)) -> ColorImage {
     depth_image(map.resolution(), max_side, range, |x, y| map.in_domain(x, y).then(|| map.depth(x, y)))
 }
 
@@ -244,7 +244,7 @@ pub fn depth_range(map: &LightMap, max_side: u32) -> Option<(f32, f32)> {
 }
 
 /// [`depth_range`] of a VPL's plane map.
-pub fn plane_map_range(map: &PlaneMap, max_side: u32) -> Option<(f32, f32)> {
+pub fn vpl_map_range(map: &VplMap, max_side: u32) -> Option<(f32, f32)> {
     range_of(map.resolution(), max_side, |x, y| vec![map.depth(x, y)])
 }
 

@@ -473,8 +473,8 @@ fn images(
 
 fn vpl_map(renderer: &Renderer, index: usize) -> VplMap {
     let map = renderer.cached_vpls().and_then(|(_, maps)| maps.get(index));
-    let range = map.and_then(|m| views::plane_map_range(m, MAP_IMAGE_SIDE));
-    let image = map.map(|m| views::plane_map_image(m, MAP_IMAGE_SIDE, range.unwrap_or((1.0, 2.0))));
+    let range = map.and_then(|m| views::vpl_map_range(m, MAP_IMAGE_SIDE));
+    let image = map.map(|m| views::vpl_map_image(m, MAP_IMAGE_SIDE, range.unwrap_or((1.0, 2.0))));
     VplMap { index, image, range, resolution: map.map_or(0, |m| m.resolution()) }
 }
 

@@ -4,7 +4,7 @@
 //! - [`paraboloid`] (Heidrich and Seidel 1998; Brabec et al. 2002) and [`cube`]: the two
 //!   omnidirectional parameterisations;
 //! - [`map`]: building a light's depth map (per texel the closest triangle's id and distance);
-//! - [`plane_map`]: a VPL's hemisphere of occluder planes, for many fast lookups;
+//! - [`vpl_map`]: a VPL's hemisphere of occluder planes or 16-bit depths, for many fast lookups;
 //! - [`classify`]: deciding a surface point lit, shadowed or undecided from a map;
 //! - [`border`]: shadow-border detection on a screen-space occlusion map (the thesis's Laplace
 //!   kernel) and dilation.
@@ -14,8 +14,8 @@ pub mod classify;
 pub mod cube;
 pub mod map;
 pub mod paraboloid;
-pub mod plane_map;
 mod tess;
+pub mod vpl_map;
 
 pub use cube::{CubeFace, cube_lookup};
 pub use map::{EMPTY, LightMap, MapCoord, MapKind, MapOptions};

@@ -782,109 +782,143 @@ fn maps_are_identical_for_any_thread_count() {
     }
 }
 
-/// A VPL's plane map decides, for points on the scene's triangles, what a ray from the VPL
-/// finds (a nearer triangle or not), away from the outlines where a texel's plane stands for
-/// its neighbours: random layers of triangles, random points on them.
+/// A VPL's map decides, for points on the scene's triangles, what a ray from the VPL finds (a
+/// nearer triangle or not), away from the outlines where a texel stands for its neighbours:
+/// random layers of triangles, random points on them, both formats.
 #[test]
-fn plane_map_decisions_match_brute_force_ray_casting() {
-    use hyrt_shadowmap::{classify::triangle_planes, plane_map::PlaneMap};
+fn vpl_map_decisions_match_brute_force_ray_casting() {
+    use hyrt_shadowmap::{
+        classify::triangle_planes,
+        vpl_map::{VplFormat, VplMap},
+    };
     let o = Vec3::new(0.1, -0.2, 0.05);
     let tris = layered_scene(11, 30, o.as_dvec3());
+    let planes = triangle_planes(&tris);
     let axis = Vec3::new(-0.2, 0.9, 0.3).normalize();
     let res = 256;
-    let map = PlaneMap::build(&tris, &triangle_planes(&tris), o, axis, &opts(MapKind::Cube, res, 8.0));
-    assert_eq!(map.texels().len(), (res * res) as usize);
-    let texel = 4.0 / res as f64;
-    let mut rng = Rng(3);
-    let (mut checked, mut hidden) = (0, 0);
-    for _ in 0..40_000 {
-        let own = (rng.f64() * tris.len() as f64) as usize;
-        let (a, b) = (rng.f64(), rng.f64());
-        let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
-        let [v0, v1, v2] = tris[own].map(|v| v.as_dvec3());
-        let p = v0 + (v1 - v0) * a + (v2 - v0) * b;
-        let d = p - o.as_dvec3();
-        let (r, w) = (d.length(), d.normalize());
-        if w.dot(axis.as_dvec3()) <= 0.05 {
-            continue; // behind the hemisphere or on its rim
+    for format in [VplFormat::Planes, VplFormat::Depth16] {
+        let map = VplMap::build(&tris, &planes, o, axis, &opts(MapKind::Cube, res, 8.0), format);
+        // The texels, and the half floats' one padding element.
+        let texels = (res * res) as usize * format.texel_bytes();
+        assert!((texels..=texels + 2).contains(&map.memory_bytes()), "{}", map.memory_bytes());
+        let texel = 4.0 / res as f64;
+        let mut rng = Rng(3);
+        let (mut checked, mut hidden) = (0, 0);
+        for _ in 0..40_000 {
+            let own = (rng.f64() * tris.len() as f64) as usize;
+            let (a, b) = (rng.f64(), rng.f64());
+            let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+            let [v0, v1, v2] = tris[own].map(|v| v.as_dvec3());
+            let p = v0 + (v1 - v0) * a + (v2 - v0) * b;
+            let d = p - o.as_dvec3();
+            let (r, w) = (d.length(), d.normalize());
+            if w.dot(axis.as_dvec3()) <= 0.05 {
+                continue; // behind the hemisphere or on its rim
+            }
+            let (id, t) = cast(&tris, o.as_dvec3(), w);
+            // Away from every outline the ray passes near, by two texels.
+            if tris.iter().any(|tri| angle_to_edges(o.as_dvec3(), w, tri) < 2.0 * texel) {
+                continue;
+            }
+            let want_hidden = id != EMPTY && id as usize != own && t < r * (1.0 - 1e-3);
+            let (wv, rv) = (w.as_vec3(), r as f32);
+            // The receiver's normal, facing the VPL.
+            let n = planes[own].n;
+            let ng = if n.dot(wv) < 0.0 { n } else { -n };
+            let margin = 0.5 * (1.0 + wv.dot(axis)) * 2.0 / res as f32 * rv + format.tolerance() * rv;
+            let i = map.index(wv) as u32;
+            let got = map.hidden_at(i % res, i / res, wv, rv, ng, -ng.dot(wv), margin);
+            assert_eq!(
+                got, want_hidden,
+                "{format:?}: point {p} of triangle {own}: the ray meets {id} at {t} of {r}"
+            );
+            checked += 1;
+            hidden += usize::from(got);
         }
-        let (id, t) = cast(&tris, o.as_dvec3(), w);
-        // Away from every outline the ray passes near, by two texels.
-        let near = tris.iter().any(|tri| angle_to_edges(o.as_dvec3(), w, tri) < 2.0 * texel);
-        if near {
-            continue;
-        }
-        let want_hidden = id != EMPTY && id as usize != own && t < r * (1.0 - 1e-3);
-        let wv = w.as_vec3();
-        let margin = 0.5 * (1.0 + wv.dot(axis)) * 2.0 / res as f32 * r as f32 + 1e-5 * r as f32;
-        let got = PlaneMap::occluded(map.texels()[map.index(wv)], wv, r as f32, margin);
-        assert_eq!(got, want_hidden, "point {p} of triangle {own}: the ray meets {id} at {t} of {r}");
-        checked += 1;
-        hidden += usize::from(got);
+        println!("{format:?}: {checked} points checked, {hidden} hidden");
+        assert!(checked > 2000 && hidden > 500 && checked - hidden > 500, "{checked} {hidden}");
     }
-    println!("plane map: {checked} points checked, {hidden} hidden");
-    assert!(checked > 2000 && hidden > 500 && checked - hidden > 500, "{checked} {hidden}");
 }
 
-/// Along each texel centre's direction, the stored plane gives the distance to the nearest
-/// triangle (the map's id there), to `f32` rounding; empty texels are at infinity, and every
-/// texel outside the disc copies a texel inside it.
+/// Along each texel centre's direction, the stored surface is at the distance of the nearest
+/// triangle's plane (the map's id there), to the format's rounding; empty texels are at
+/// infinity, and every texel outside the disc holds a neighbour's surface.
 #[test]
-fn plane_map_depths_are_the_planes_along_texel_centres() {
-    use hyrt_shadowmap::{classify::triangle_planes, plane_map::PlaneMap};
+fn vpl_map_depths_are_the_planes_along_texel_centres() {
+    use hyrt_shadowmap::{
+        classify::triangle_planes,
+        vpl_map::{VplFormat, VplMap},
+    };
     let o = Vec3::new(-0.3, 0.1, 0.2);
     let tris = layered_scene(7, 20, o.as_dvec3());
     let axis = Vec3::new(0.5, 0.5, -0.7).normalize();
     let res = 64;
-    let map = PlaneMap::build(&tris, &triangle_planes(&tris), o, axis, &opts(MapKind::Cube, res, 4.0));
     let ids = LightMap::build_hemisphere(&tris, o, axis, &opts(MapKind::Cube, res, 4.0));
-    let (mut drawn, mut empty) = (0, 0);
-    for y in 0..res {
-        for x in 0..res {
-            if !map.in_domain(x, y) {
-                // A copy of a neighbour in the disc, or empty where no neighbour is.
-                let g = map.texels()[(y * res + x) as usize];
-                let copies = (y.saturating_sub(1)..=(y + 1).min(res - 1))
-                    .flat_map(|yy| (x.saturating_sub(1)..=(x + 1).min(res - 1)).map(move |xx| (xx, yy)))
-                    .any(|(xx, yy)| map.in_domain(xx, yy) && map.texels()[(yy * res + xx) as usize] == g);
-                assert!(copies || g == [0.0; 3], "texel ({x}, {y}) outside the disc");
-                continue;
+    for format in [VplFormat::Planes, VplFormat::Depth16] {
+        let map =
+            VplMap::build(&tris, &triangle_planes(&tris), o, axis, &opts(MapKind::Cube, res, 4.0), format);
+        let (mut drawn, mut empty, mut outside) = (0, 0, 0);
+        for y in 0..res {
+            for x in 0..res {
+                let id = ids.id(0, x, y);
+                let got = map.depth(x, y);
+                if !map.in_domain(x, y) {
+                    // Finite only where a neighbour in the disc sees a surface.
+                    let near = (y.saturating_sub(1)..=(y + 1).min(res - 1))
+                        .flat_map(|yy| (x.saturating_sub(1)..=(x + 1).min(res - 1)).map(move |xx| (xx, yy)))
+                        .any(|(xx, yy)| map.in_domain(xx, yy) && ids.id(0, xx, yy) != EMPTY);
+                    assert!(near || got == f32::INFINITY, "{format:?}: texel ({x}, {y}) outside the disc");
+                    outside += usize::from(got.is_finite());
+                    continue;
+                }
+                if id == EMPTY {
+                    assert_eq!(got, f32::INFINITY);
+                    empty += 1;
+                    continue;
+                }
+                let dir = ids.texel_dir(0, x as f32 + 0.5, y as f32 + 0.5).as_dvec3();
+                let want = plane_distance(o.as_dvec3(), dir, &tris[id as usize]);
+                let tol = 2.0 * f64::from(format.tolerance()).max(1e-5);
+                assert!(
+                    (f64::from(got) / want - 1.0).abs() < tol,
+                    "{format:?}: texel ({x}, {y}): {got} vs {want}"
+                );
+                drawn += 1;
             }
-            let id = ids.id(0, x, y);
-            let got = map.depth(x, y);
-            if id == EMPTY {
-                assert_eq!(got, f32::INFINITY);
-                empty += 1;
-                continue;
-            }
-            let dir = ids.texel_dir(0, x as f32 + 0.5, y as f32 + 0.5).as_dvec3();
-            let want = plane_distance(o.as_dvec3(), dir, &tris[id as usize]);
-            assert!((f64::from(got) / want - 1.0).abs() < 1e-4, "texel ({x}, {y}): {got} vs {want}");
-            drawn += 1;
         }
+        assert!(drawn > 1000 && empty > 10 && outside > 10, "{drawn} {empty} {outside}");
     }
-    assert!(drawn > 1000 && empty > 10, "{drawn} {empty}");
 }
 
 /// No triangles, or only unusable ones (NaN, zero area), give a map of empty texels: nothing
 /// is hidden.
 #[test]
-fn plane_map_of_nothing_hides_nothing() {
-    use hyrt_shadowmap::{classify::triangle_planes, plane_map::PlaneMap};
+fn vpl_map_of_nothing_hides_nothing() {
+    use hyrt_shadowmap::{
+        classify::triangle_planes,
+        vpl_map::{VplFormat, VplMap},
+    };
     let bad = vec![
         [Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0)],
         [Vec3::splat(f32::NAN), Vec3::Y, Vec3::Z],
         [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, f32::INFINITY), Vec3::new(0.0, 1.0, 1.0)],
     ];
     for tris in [vec![], bad] {
-        let map = PlaneMap::build(
-            &tris,
-            &triangle_planes(&tris),
-            Vec3::ZERO,
-            Vec3::Z,
-            &opts(MapKind::Cube, 16, 4.0),
-        );
-        assert!(map.texels().iter().all(|g| *g == [0.0; 3]));
-        assert!(!PlaneMap::occluded(map.texels()[map.index(Vec3::Z)], Vec3::Z, 5.0, 0.0));
+        for format in [VplFormat::Planes, VplFormat::Depth16] {
+            let map = VplMap::build(
+                &tris,
+                &triangle_planes(&tris),
+                Vec3::ZERO,
+                Vec3::Z,
+                &opts(MapKind::Cube, 16, 4.0),
+                format,
+            );
+            for y in 0..16 {
+                for x in 0..16 {
+                    assert_eq!(map.depth(x, y), f32::INFINITY);
+                    assert!(!map.hidden_at(x, y, Vec3::Z, 5.0, Vec3::NEG_Z, 1.0, 0.0));
+                }
+            }
+        }
     }
 }

@@ -1,19 +1,21 @@
 //! The VPL gather: per diffuse point, `sum_v I_v cos_x cos_v / max(d^2, d_min^2)` over the VPLs
-//! that the VPLs' plane maps ([`PlaneMap`]) call visible.
+//! that the VPLs' maps ([`VplMap`], planes or 16-bit depths) call visible.
 //!
 //! It is the inner loop of indirect light (points times VPLs), so it is laid out for it: the
 //! points in struct-of-arrays order ([`Points`]), one VPL's constants broadcast
-//! ([`VplConsts`]), and eight points at a time with AVX2 where the CPU has it. The scalar
-//! [`pair`] performs the same `f32` operations in the same order (no fused multiply-adds,
-//! IEEE square roots and divisions), so both give the same bytes; the tests hold them to it.
+//! ([`VplConsts`]), and eight points at a time with AVX2 (and F16C) where the CPU has them. The
+//! scalar [`pair`] performs the same `f32` operations in the same order (no fused
+//! multiply-adds, IEEE square roots and divisions, exact half-float conversions), so both give
+//! the same bytes; the tests hold them to it.
 //!
 //! Per pair, with `w = (p - o) / r` the unit direction from the VPL at `o` to the point `p`:
 //! `cos_x = -n_s . w`, `cos_g = -n_g . w` (the geometric normal: the point must face the VPL),
 //! `cos_v = a . w` (`a` the VPL's normal, its map's axis); the map decides visibility along
-//! `w` as [`PlaneMap`]'s module docs derive.
+//! `w` as [`VplMap`]'s module docs derive. `1 / max(d^2, d_min^2)` and the rounding band's
+//! `1 / cos_g` share one division.
 
 use glam::Vec3;
-use hyrt_shadowmap::plane_map::{PLANE_TOLERANCE, PlaneMap};
+use hyrt_shadowmap::vpl_map::VplMap;
 
 use super::{SurfaceHit, vpl::Vpl};
 
@@ -94,15 +96,19 @@ pub(crate) struct VplConsts {
     pub clamp2: f32,
     /// `bias * 2 / res`: the margin's texel footprints per unit of `(1 + cos_v) r`.
     pub bias_k: f32,
+    /// The stored value's relative rounding ([`VplFormat::tolerance`]).
+    pub tol: f32,
     /// The rounding band's `e` (`sqrt 3` times the per-axis point error).
     pub e: f32,
     pub half: f32,
     pub last: f32,
     pub res: u32,
+    /// `1 / scale` of 16-bit depths (1 for planes; [`VplMap::depths`]).
+    pub inv_scale: f32,
 }
 
 impl VplConsts {
-    pub fn new(v: &Vpl, map: &PlaneMap, clamp2: f32, bias: f32, point_error: f32) -> Self {
+    pub fn new(v: &Vpl, map: &VplMap, clamp2: f32, bias: f32, point_error: f32) -> Self {
         let [t, b, a] = map.frame();
         let res = map.resolution();
         Self {
@@ -113,18 +119,32 @@ impl VplConsts {
             intensity: v.intensity,
             clamp2,
             bias_k: bias * 2.0 / res as f32,
+            tol: map.format().tolerance(),
             e: point_error * 3f32.sqrt(),
             half: res as f32 * 0.5,
             last: map.last(),
             res,
+            inv_scale: map.depths().map_or(1.0, |(_, inv_scale)| inv_scale),
         }
     }
 }
 
-/// `g_v` times the visibility of one VPL from one point (0 when it faces away or is hidden):
-/// the scalar kernel, the reference for [`add_vpl`].
-#[inline]
-pub(crate) fn pair(c: &VplConsts, texels: &[[f32; 3]], p: Vec3, ns: Vec3, ng: Vec3) -> f32 {
+/// What is shared by every texel a pair may look at.
+struct Ray {
+    w: Vec3,
+    r: f32,
+    cos_g: f32,
+    ng: Vec3,
+    /// Continuous texel coordinates of `w`.
+    fx: f32,
+    fy: f32,
+    margin: f32,
+    g: f32,
+}
+
+/// The pair's geometry, or `None` when the point or the VPL faces away.
+#[inline(always)]
+fn ray(c: &VplConsts, p: Vec3, ns: Vec3, ng: Vec3) -> Option<Ray> {
     let (dx, dy, dz) = (p.x - c.o.x, p.y - c.o.y, p.z - c.o.z);
     let d2 = dx * dx + dy * dy + dz * dz;
     let r = d2.sqrt();
@@ -134,9 +154,8 @@ pub(crate) fn pair(c: &VplConsts, texels: &[[f32; 3]], p: Vec3, ns: Vec3, ng: Ve
     let cos_g = -(ng.x * w.x + ng.y * w.y + ng.z * w.z);
     let cos_v = c.a.x * w.x + c.a.y * w.y + c.a.z * w.z;
     if !(cos_x > 0.0 && cos_g > 0.0 && cos_v > 0.0) {
-        return 0.0;
+        return None;
     }
-    // One division for both `1 / max(d^2, d_min^2)` and the rounding band's `1 / cos_g`.
     let m2 = d2.max(c.clamp2);
     let q = 1.0 / (cos_g * m2);
     let g = cos_x * cos_v * cos_g * q;
@@ -144,96 +163,115 @@ pub(crate) fn pair(c: &VplConsts, texels: &[[f32; 3]], p: Vec3, ns: Vec3, ng: Ve
     let iden = 1.0 / den;
     let u = (c.t.x * w.x + c.t.y * w.y + c.t.z * w.z) * iden;
     let v = (c.b.x * w.x + c.b.y * w.y + c.b.z * w.z) * iden;
-    let x = ((u + 1.0) * c.half).max(0.0).min(c.last) as u32;
-    let y = ((1.0 - v) * c.half).max(0.0).min(c.last) as u32;
-    let m = texels[(y * c.res + x) as usize];
-    let margin = c.bias_k * den * r + PLANE_TOLERANCE * r + (c.e + c.e * m2 * q);
-    if PlaneMap::occluded(m, w, r, margin) { 0.0 } else { g }
+    let margin = c.bias_k * den * r + c.tol * r + (c.e + c.e * m2 * q);
+    Some(Ray { w, r, cos_g, ng, fx: (u + 1.0) * c.half, fy: (1.0 - v) * c.half, margin, g })
+}
+
+/// Whether texel `(x, y)` hides the pair's point ([`VplMap::hidden_at`]).
+#[inline(always)]
+fn hidden(map: &VplMap, ray: &Ray, x: u32, y: u32) -> bool {
+    map.hidden_at(x, y, ray.w, ray.r, ray.ng, ray.cos_g, ray.margin)
+}
+
+/// `g_v` times the visibility of one VPL from one point (0 when it faces away or is hidden):
+/// the texel under the point decides. The scalar kernel, the reference for [`add_vpl`].
+#[inline]
+pub(crate) fn pair(c: &VplConsts, map: &VplMap, p: Vec3, ns: Vec3, ng: Vec3) -> f32 {
+    let Some(ray) = ray(c, p, ns, ng) else { return 0.0 };
+    let x = ray.fx.max(0.0).min(c.last) as u32;
+    let y = ray.fy.max(0.0).min(c.last) as u32;
+    if hidden(map, &ray, x, y) { 0.0 } else { ray.g }
 }
 
 /// [`pair`] with percentage-closer filtering: the visibility is the sum of the bilinear weights
 /// of the 2x2 texels whose centres surround the point's position that leave it visible (the
 /// footprint shifted inside the map at its border). Scalar only: measured, it buys no accuracy
 /// for its cost (`docs/sweeps/`), and is kept as a knob to show that.
-pub(crate) fn pair_bilinear(c: &VplConsts, texels: &[[f32; 3]], p: Vec3, ns: Vec3, ng: Vec3) -> f32 {
-    let d = p - c.o;
-    let d2 = d.length_squared();
-    let r = d2.sqrt();
-    let w = d / r;
-    let (cos_x, cos_g, cos_v) = (-ns.dot(w), -ng.dot(w), c.a.dot(w));
-    if !(cos_x > 0.0 && cos_g > 0.0 && cos_v > 0.0) {
-        return 0.0;
-    }
-    let g = cos_x * cos_v / d2.max(c.clamp2);
-    let den = 1.0 + cos_v;
-    let (u, v) = (c.t.dot(w) / den, c.b.dot(w) / den);
+pub(crate) fn pair_bilinear(c: &VplConsts, map: &VplMap, p: Vec3, ns: Vec3, ng: Vec3) -> f32 {
+    let Some(ray) = ray(c, p, ns, ng) else { return 0.0 };
     let hi = c.res.saturating_sub(2) as f32;
-    let fx = ((u + 1.0) * c.half - 0.5).clamp(0.0, hi);
-    let fy = ((1.0 - v) * c.half - 0.5).clamp(0.0, hi);
+    let fx = (ray.fx - 0.5).clamp(0.0, hi);
+    let fy = (ray.fy - 0.5).clamp(0.0, hi);
     let (x0, y0) = (fx as u32, fy as u32);
     let (ax, ay) = (fx - x0 as f32, fy - y0 as f32);
-    let margin = c.bias_k * den * r + PLANE_TOLERANCE * r + (c.e + c.e / cos_g);
     let mut visible = 0.0;
     for (dx, dy, wt) in
         [(0, 0, (1.0 - ax) * (1.0 - ay)), (1, 0, ax * (1.0 - ay)), (0, 1, (1.0 - ax) * ay), (1, 1, ax * ay)]
     {
-        let (x, y) = ((x0 + dx).min(c.res - 1), (y0 + dy).min(c.res - 1));
-        if !PlaneMap::occluded(texels[(y * c.res + x) as usize], w, r, margin) {
+        if !hidden(map, &ray, (x0 + dx).min(c.res - 1), (y0 + dy).min(c.res - 1)) {
             visible += wt;
         }
     }
-    g * visible
+    ray.g * visible
 }
 
 /// Adds VPL `c`'s `I_v g_v` (visible pairs only) to `sums` for every point of `pts`.
-pub(crate) fn add_vpl(c: &VplConsts, texels: &[[f32; 3]], pts: &Points, sums: &mut Sums) {
+pub(crate) fn add_vpl(c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
     #[cfg(target_arch = "x86_64")]
-    if avx2() {
-        // SAFETY: AVX2 is present (checked above); the kernel's loads stay within `pts` and
-        // `sums` (padded to whole vectors, asserted there) and its gathers within `texels`
-        // (indices clamped to the resolution, and `texels` holds `res^2` entries).
-        unsafe { avx2::add_vpl(c, texels, pts, sums) };
+    if simd() {
+        // SAFETY: AVX2 and F16C are present (checked above); the kernels' loads stay within
+        // `pts` and `sums` (padded to whole vectors, asserted there) and their gathers within
+        // the map's texels (indices clamped to the resolution; see each kernel).
+        unsafe {
+            match (map.planes(), map.depths()) {
+                (Some(g), _) => avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, sums),
+                (_, Some((bits, _))) => avx2::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, sums),
+                _ => {}
+            }
+        }
         return;
     }
-    add_vpl_with(pair, c, texels, pts, sums);
+    add_vpl_with(pair, c, map, pts, sums);
 }
 
 /// A kernel of one pair: [`pair`] or [`pair_bilinear`].
-pub(crate) type PairFn = fn(&VplConsts, &[[f32; 3]], Vec3, Vec3, Vec3) -> f32;
+pub(crate) type PairFn = fn(&VplConsts, &VplMap, Vec3, Vec3, Vec3) -> f32;
 
 /// [`add_vpl`] one point at a time, with kernel `f`.
-pub(crate) fn add_vpl_with(f: PairFn, c: &VplConsts, texels: &[[f32; 3]], pts: &Points, sums: &mut Sums) {
+pub(crate) fn add_vpl_with(f: PairFn, c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
     for i in 0..pts.len() {
         let (p, ns, ng) = pts.get(i);
-        let g = f(c, texels, p, ns, ng);
+        let g = f(c, map, p, ns, ng);
         for k in 0..3 {
             sums.0[k][i] += c.intensity[k] * g;
         }
     }
 }
 
-/// Whether the vector kernel runs on this CPU.
+/// Whether the vector kernels run on this CPU (AVX2 and F16C).
 #[cfg(target_arch = "x86_64")]
-pub(crate) fn avx2() -> bool {
+pub(crate) fn simd() -> bool {
     static HAS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *HAS.get_or_init(|| std::arch::is_x86_feature_detected!("avx2"))
+    *HAS.get_or_init(|| {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("f16c")
+    })
 }
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use std::arch::x86_64::*;
 
-    use super::{LANES, PLANE_TOLERANCE, Points, Sums, VplConsts};
+    use super::{LANES, Points, Sums, VplConsts};
 
-    /// [`super::pair`] on eight points at once, summed into `sums`.
+    /// [`super::pair`] on eight points at once, summed into `sums`: texels are planes (three
+    /// `f32` each) or, with `DEPTH16`, half floats.
     ///
     /// # Safety
-    /// AVX2 must be present; `texels` must hold `c.res^2` entries.
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn add_vpl(c: &VplConsts, texels: &[[f32; 3]], pts: &Points, sums: &mut Sums) {
+    /// AVX2 and F16C must be present; `texels` must point to `len` elements: `3 res^2` `f32`
+    /// for planes, or more than `res^2` `u16` for half floats (the padding element keeps a
+    /// 4-byte load at the last texel in bounds).
+    #[target_feature(enable = "avx2,f16c")]
+    pub(super) unsafe fn add_vpl<const DEPTH16: bool>(
+        c: &VplConsts,
+        texels: *const f32,
+        len: usize,
+        pts: &Points,
+        sums: &mut Sums,
+    ) {
         let n = pts.len();
         assert!(n.is_multiple_of(LANES) && sums.0.iter().all(|s| s.len() == n));
-        assert_eq!(texels.len(), c.res as usize * c.res as usize);
+        let texels_n = c.res as usize * c.res as usize;
+        assert!(if DEPTH16 { len > texels_n } else { len == 3 * texels_n });
         let s = _mm256_set1_ps;
         let (ox, oy, oz) = (s(c.o.x), s(c.o.y), s(c.o.z));
         let (tx, ty, tz) = (s(c.t.x), s(c.t.y), s(c.t.z));
@@ -241,10 +279,10 @@ mod avx2 {
         let (ax, ay, az) = (s(c.a.x), s(c.a.y), s(c.a.z));
         let (ir, ig, ib) = (s(c.intensity.x), s(c.intensity.y), s(c.intensity.z));
         let (clamp2, bias_k, e, half, last) = (s(c.clamp2), s(c.bias_k), s(c.e), s(c.half), s(c.last));
-        let (zero, one, tol) = (s(0.0), s(1.0), s(PLANE_TOLERANCE));
-        let sign = s(-0.0);
+        let (zero, one, tol, sign) = (s(0.0), s(1.0), s(c.tol), s(-0.0));
+        let (inv_scale, inv2, halfpx) = (s(c.inv_scale), s(2.0 / c.res as f32), s(0.5));
         let res = _mm256_set1_epi32(c.res as i32);
-        let base = texels.as_ptr().cast::<f32>();
+        let low16 = _mm256_set1_epi32(0xffff);
         let dot = |x: __m256, y: __m256, z: __m256, a: __m256, b: __m256, c: __m256| {
             _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x), _mm256_mul_ps(b, y)), _mm256_mul_ps(c, z))
         };
@@ -265,8 +303,9 @@ mod avx2 {
             let r = _mm256_sqrt_ps(d2);
             let inv = _mm256_div_ps(one, r);
             let (wx, wy, wz) = (_mm256_mul_ps(dx, inv), _mm256_mul_ps(dy, inv), _mm256_mul_ps(dz, inv));
+            let (ngxv, ngyv, ngzv) = (ld(ngx), ld(ngy), ld(ngz));
             let cos_x = _mm256_xor_ps(dot(wx, wy, wz, ld(nsx), ld(nsy), ld(nsz)), sign);
-            let cos_g = _mm256_xor_ps(dot(wx, wy, wz, ld(ngx), ld(ngy), ld(ngz)), sign);
+            let cos_g = _mm256_xor_ps(dot(wx, wy, wz, ngxv, ngyv, ngzv), sign);
             let cos_v = dot(wx, wy, wz, ax, ay, az);
             let faces = _mm256_and_ps(
                 _mm256_and_ps(
@@ -285,30 +324,71 @@ mod avx2 {
             let iden = _mm256_div_ps(one, den);
             let u = _mm256_mul_ps(dot(wx, wy, wz, tx, ty, tz), iden);
             let v = _mm256_mul_ps(dot(wx, wy, wz, bx, by, bz), iden);
-            // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
-            let fx = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(u, one), half), zero), last);
-            let fy = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(one, v), half), zero), last);
-            let idx =
-                _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), res), _mm256_cvttps_epi32(fx));
-            let idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
-            // SAFETY: the indices of facing lanes are below `res^2` (clamped above), so every
-            // gathered float lies within `texels`; other lanes are masked off and not read.
-            let (gx, gy, gz) = unsafe {
-                (
-                    _mm256_mask_i32gather_ps::<4>(zero, base, idx3, faces),
-                    _mm256_mask_i32gather_ps::<4>(zero, base.add(1), idx3, faces),
-                    _mm256_mask_i32gather_ps::<4>(zero, base.add(2), idx3, faces),
-                )
-            };
-            let sdot = dot(wx, wy, wz, gx, gy, gz);
             let margin = _mm256_add_ps(
                 _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(bias_k, den), r), _mm256_mul_ps(tol, r)),
                 _mm256_add_ps(e, _mm256_mul_ps(_mm256_mul_ps(e, m2), q)),
             );
-            let hidden = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GT_OQ>(sdot, zero),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sdot, _mm256_sub_ps(r, margin)), one),
-            );
+            // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
+            let fx = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(u, one), half), zero), last);
+            let fy = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(one, v), half), zero), last);
+            let (ix, iy) = (_mm256_cvttps_epi32(fx), _mm256_cvttps_epi32(fy));
+            let idx = _mm256_add_epi32(_mm256_mullo_epi32(iy, res), ix);
+            let hidden = if DEPTH16 {
+                // SAFETY: facing lanes' indices are below `res^2`, and a 4-byte load at half
+                // float `idx` ends within the padded array; other lanes are masked off.
+                let word = unsafe {
+                    _mm256_mask_i32gather_epi32::<2>(
+                        _mm256_setzero_si256(),
+                        texels.cast(),
+                        idx,
+                        _mm256_castps_si256(faces),
+                    )
+                };
+                let packed = _mm256_packus_epi32(_mm256_and_si256(word, low16), _mm256_setzero_si256());
+                let halves = _mm256_castsi256_si128(_mm256_permute4x64_epi64::<0b1000>(packed));
+                let sv = _mm256_mul_ps(_mm256_cvtph_ps(halves), inv_scale);
+                let uc =
+                    _mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(ix), halfpx), inv2), one);
+                let vc =
+                    _mm256_sub_ps(one, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(iy), halfpx), inv2));
+                let r2 = _mm256_add_ps(_mm256_mul_ps(uc, uc), _mm256_mul_ps(vc, vc));
+                let zc = _mm256_div_ps(_mm256_sub_ps(one, r2), _mm256_add_ps(one, r2));
+                let f = _mm256_add_ps(one, zc);
+                let nt = dot(tx, ty, tz, ngxv, ngyv, ngzv);
+                let nb = dot(bx, by, bz, ngxv, ngyv, ngzv);
+                let na = dot(ax, ay, az, ngxv, ngyv, ngzv);
+                let cos_c = _mm256_xor_ps(
+                    _mm256_add_ps(
+                        _mm256_add_ps(
+                            _mm256_mul_ps(nt, _mm256_mul_ps(uc, f)),
+                            _mm256_mul_ps(nb, _mm256_mul_ps(vc, f)),
+                        ),
+                        _mm256_mul_ps(na, zc),
+                    ),
+                    sign,
+                );
+                let t_cmp = _mm256_mul_ps(r, _mm256_div_ps(cos_g, _mm256_max_ps(cos_c, cos_g)));
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GT_OQ>(sv, zero),
+                    _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sv, _mm256_sub_ps(t_cmp, margin)), one),
+                )
+            } else {
+                let idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
+                // SAFETY: facing lanes' indices are below `res^2`, so every gathered float lies
+                // within the `3 res^2` of `texels`; other lanes are masked off and not read.
+                let (gx, gy, gz) = unsafe {
+                    (
+                        _mm256_mask_i32gather_ps::<4>(zero, texels, idx3, faces),
+                        _mm256_mask_i32gather_ps::<4>(zero, texels.add(1), idx3, faces),
+                        _mm256_mask_i32gather_ps::<4>(zero, texels.add(2), idx3, faces),
+                    )
+                };
+                let sdot = dot(wx, wy, wz, gx, gy, gz);
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GT_OQ>(sdot, zero),
+                    _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sdot, _mm256_sub_ps(r, margin)), one),
+                )
+            };
             let g = _mm256_and_ps(_mm256_andnot_ps(hidden, faces), g);
             for (acc, int) in [(&mut *sr, ir), (&mut *sg, ig), (&mut *sb, ib)] {
                 // SAFETY: as the loads above.
@@ -324,11 +404,13 @@ mod avx2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use hyrt_shadowmap::{MapOptions, classify::triangle_planes};
+    use hyrt_shadowmap::{MapOptions, classify::triangle_planes, vpl_map::VplFormat};
+
+    const FORMATS: [VplFormat; 2] = [VplFormat::Planes, VplFormat::Depth16];
 
     /// A floor (`y = 0`, 4 units square) under a square lid (`y = 0.5`, half a unit square) and
     /// a VPL above both, facing down.
-    fn scene(res: u32) -> (PlaneMap, VplConsts) {
+    fn scene(res: u32, format: VplFormat) -> (VplMap, VplConsts) {
         let quad = |y: f32, h: f32| {
             let (a, b, c, d) =
                 (Vec3::new(-h, y, -h), Vec3::new(h, y, -h), Vec3::new(h, y, h), Vec3::new(-h, y, h));
@@ -338,72 +420,78 @@ mod tests {
         let planes = triangle_planes(&tris);
         let o = Vec3::new(0.0, 1.0, 0.0);
         let opts = MapOptions { resolution: res, ..MapOptions::default() };
-        let map = PlaneMap::build(&tris, &planes, o, Vec3::NEG_Y, &opts);
+        let map = VplMap::build(&tris, &planes, o, Vec3::NEG_Y, &opts, format);
         let v = Vpl { position: o, normal: Vec3::NEG_Y, intensity: Vec3::new(1.0, 2.0, 3.0), tri: 0 };
         let c = VplConsts::new(&v, &map, 0.0, 0.5, 1e-7);
         (map, c)
     }
 
     /// Floor points in the lid's shadow (the square of half-width 0.5 under a lid of
-    /// half-width 0.25 halfway up) are hidden, and the others lit, beyond a texel of the edge.
+    /// half-width 0.25 halfway up) are hidden, and the others lit, beyond a texel of the edge,
+    /// with either format.
     #[test]
     fn the_lid_hides_what_it_covers() {
-        let (map, c) = scene(256);
-        let (mut hidden, mut lit) = (0, 0);
-        for i in 0..64 {
-            for j in 0..64 {
-                let p = Vec3::new(
-                    -1.5 + 3.0 * (i as f32 + 0.5) / 64.0,
-                    0.0,
-                    -1.5 + 3.0 * (j as f32 + 0.5) / 64.0,
-                );
-                let edge = p.x.abs().max(p.z.abs());
-                if (edge - 0.5).abs() < 0.03 {
-                    continue;
-                }
-                let g = pair(&c, map.texels(), p, Vec3::Y, Vec3::Y);
-                if edge < 0.5 {
-                    assert_eq!(g, 0.0, "{p} is under the lid");
-                    hidden += 1;
-                } else {
-                    let d = Vec3::new(0.0, 1.0, 0.0) - p;
-                    let want = (d.y / d.length()).powi(2) / d.length_squared();
-                    assert!((g - want).abs() <= 1e-5 * want, "{p}: {g} vs {want}");
-                    lit += 1;
+        for format in FORMATS {
+            let (map, c) = scene(256, format);
+            let (mut hidden, mut lit) = (0, 0);
+            for i in 0..64 {
+                for j in 0..64 {
+                    let p = Vec3::new(
+                        -1.5 + 3.0 * (i as f32 + 0.5) / 64.0,
+                        0.0,
+                        -1.5 + 3.0 * (j as f32 + 0.5) / 64.0,
+                    );
+                    let edge = p.x.abs().max(p.z.abs());
+                    if (edge - 0.5).abs() < 0.03 {
+                        continue;
+                    }
+                    let g = pair(&c, &map, p, Vec3::Y, Vec3::Y);
+                    if edge < 0.5 {
+                        assert_eq!(g, 0.0, "{format:?}: {p} is under the lid");
+                        hidden += 1;
+                    } else {
+                        let d = Vec3::new(0.0, 1.0, 0.0) - p;
+                        let want = (d.y / d.length()).powi(2) / d.length_squared();
+                        assert!((g - want).abs() <= 1e-5 * want, "{format:?}: {p}: {g} vs {want}");
+                        lit += 1;
+                    }
                 }
             }
+            assert!(hidden > 200 && lit > 2000, "{hidden} {lit}");
         }
-        assert!(hidden > 200 && lit > 2000, "{hidden} {lit}");
     }
 
     /// The vector kernel gives the scalar kernel's bytes, on points all over the scene with
     /// normals in every direction (facing the VPL or not, in front of the lid or behind it).
     #[test]
     fn vector_and_scalar_kernels_agree_bit_for_bit() {
-        let (map, c) = scene(64);
-        let mut pts = Points::default();
-        for i in 0..1001u32 {
-            let f = i as f32;
-            let p = Vec3::new((f * 0.37).sin() * 1.8, (f * 0.11).cos() * 0.3 + 0.25, (f * 0.23).cos() * 1.8);
-            let n = Vec3::new((f * 1.3).sin(), (f * 0.7).cos(), (f * 2.1).sin()).normalize_or(Vec3::Y);
-            let ns = (n + Vec3::new(0.1, 0.0, -0.1)).normalize();
-            pts.push_raw(p, ns, n);
+        for format in FORMATS {
+            let (map, c) = scene(64, format);
+            let mut pts = Points::default();
+            for i in 0..1001u32 {
+                let f = i as f32;
+                let p =
+                    Vec3::new((f * 0.37).sin() * 1.8, (f * 0.11).cos() * 0.3 + 0.25, (f * 0.23).cos() * 1.8);
+                let n = Vec3::new((f * 1.3).sin(), (f * 0.7).cos(), (f * 2.1).sin()).normalize_or(Vec3::Y);
+                let ns = (n + Vec3::new(0.1, 0.0, -0.1)).normalize();
+                pts.push_raw(p, ns, n);
+            }
+            pts.pad();
+            let (mut a, mut b) = (Sums::default(), Sums::default());
+            a.reset(pts.len());
+            b.reset(pts.len());
+            for _ in 0..3 {
+                add_vpl(&c, &map, &pts, &mut a);
+                add_vpl_with(pair, &c, &map, &pts, &mut b);
+            }
+            let bits = |s: &Sums| s.0.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "{format:?}");
+            let nonzero = (0..pts.len()).filter(|&i| a.get(i) != Vec3::ZERO).count();
+            assert!(nonzero > 100 && nonzero < 900, "{format:?}: {nonzero}: the points must mix lit and not");
         }
-        pts.pad();
-        let (mut a, mut b) = (Sums::default(), Sums::default());
-        a.reset(pts.len());
-        b.reset(pts.len());
-        for _ in 0..3 {
-            add_vpl(&c, map.texels(), &pts, &mut a);
-            add_vpl_with(pair, &c, map.texels(), &pts, &mut b);
-        }
-        let bits = |s: &Sums| s.0.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&a), bits(&b));
-        let nonzero = (0..pts.len()).filter(|&i| a.get(i) != Vec3::ZERO).count();
-        assert!(nonzero > 100 && nonzero < 900, "{nonzero}: the points must mix lit and not");
         #[cfg(target_arch = "x86_64")]
-        if !avx2() {
-            eprintln!("no AVX2 on this CPU: the vector kernel was not tested");
+        if !simd() {
+            eprintln!("no AVX2 and F16C on this CPU: the vector kernels were not tested");
         }
     }
 }

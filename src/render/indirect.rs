@@ -10,7 +10,10 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::Vec3;
-use hyrt_shadowmap::{MapOptions, plane_map::PlaneMap};
+use hyrt_shadowmap::{
+    MapOptions,
+    vpl_map::{VplFormat, VplMap},
+};
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
@@ -34,8 +37,10 @@ pub struct IndirectOptions {
     /// the VPLs, then a geometry-aware filter reconstructs (see [`run`]); 1 = off.
     pub interleave: u32,
     /// How a VPL map decides visibility: the texel under the point (the thesis), or the 2x2
-    /// texels around it, bilinearly weighted ([`Classifier::visibility_at`]).
+    /// texels around it, bilinearly weighted.
     pub filter: VplFilter,
+    /// What a VPL map's texels hold: occluder planes or 16-bit depths ([`VplMap`]).
+    pub format: VplFormat,
 }
 
 /// [`IndirectOptions::filter`].
@@ -57,25 +62,23 @@ impl VplFilter {
     }
 }
 
-/// Defaults measured on the thesis scenes with 45 VPLs (maps against rays, full image): at
-/// 256x256 per VPL 39.1 / 32.2 dB (Cornell box / office), at 1024x1024 with bias 0.5 about
-/// 52 / 39.9 dB, short of the office's 40 dB. The office sweep (`hyrt sweep scenes/office.toml
-/// --base "--preset reference --indirect maps --vpls 45" --knob vpl-filter=texel,bilinear
-/// --knob vpl-map-res=512,1024,1536`) put texel lookups at 1536x1536 on the front: 41.45 dB at
-/// the frame time of 1024x1024 (2.19x against 2.26x), where bilinear lookups at 1024 give
-/// 40.05 dB for 10 % more frame time; the price is memory and build time (812 MB and 6.6 s for
-/// the office's 43 maps, against 361 MB and 3.3 s), and on the conference room, whose mirror
-/// hits look the maps up all over the room, 13 % of the frame (2.65x -> 2.34x against VPL rays,
-/// 47.0 -> 48.2 dB). At 2048 the office reaches 42.2 dB but its maps take 1.4 GB and 12 s.
+/// Defaults chosen by measuring the thesis scenes with 45 VPLs, maps against rays on the full
+/// image (the sweeps under `docs/sweeps/*-vpl-maps`): 16-bit depths are as accurate as planes
+/// at the same resolution, in a sixth of the memory, so the default is depths at 512x512
+/// (0.5 MB per VPL), which keep the Cornell box and the conference room above 40 dB; the
+/// office stays below it at any size that fits 1 MB (its blinds' shadows need about 1500
+/// texels a side). The tessellation only has to keep the ids right, not the depths (which
+/// come from the planes): 32 texels costs no accuracy at 512 and saves a third of the build.
 impl Default for IndirectOptions {
     fn default() -> Self {
         Self {
             vpl: vpl::VplOptions::default(),
             clamp: 0.01,
-            map: MapOptions { resolution: 256, tess_texels: 16.0, ..MapOptions::default() },
+            map: MapOptions { resolution: 512, tess_texels: 32.0, ..MapOptions::default() },
             bias: 0.5,
             interleave: 1,
             filter: VplFilter::default(),
+            format: VplFormat::default(),
         }
     }
 }
@@ -84,13 +87,13 @@ impl Default for IndirectOptions {
 #[derive(Default)]
 pub(crate) struct VplCache {
     vpls: OnceLock<(Vec<vpl::Vpl>, RayCounts)>,
-    maps: OnceLock<Vec<PlaneMap>>,
+    maps: OnceLock<Vec<VplMap>>,
 }
 
 impl Renderer<'_> {
     /// The cached VPLs and, with `Indirect::Maps`, their maps (for inspection), once a frame
     /// has made them.
-    pub fn cached_vpls(&self) -> Option<(&[vpl::Vpl], &[PlaneMap])> {
+    pub fn cached_vpls(&self) -> Option<(&[vpl::Vpl], &[VplMap])> {
         let (vpls, _) = self.vpl_cache.vpls.get()?;
         Some((vpls, self.vpl_cache.maps.get().map_or(&[][..], |m| &m[..])))
     }
@@ -107,7 +110,7 @@ impl VplCache {
 pub struct Vpls<'r> {
     pub vpls: &'r [vpl::Vpl],
     /// One map per VPL with `Indirect::Maps`, else empty.
-    pub maps: &'r [PlaneMap],
+    pub maps: &'r [VplMap],
     /// Per map, what the gather needs of it and of its VPL.
     consts: Vec<VplConsts>,
     /// `d_min^2` in scene units.
@@ -140,14 +143,23 @@ impl Renderer<'_> {
         stats.record(super::Pass::VplGen, t);
         let t = Instant::now();
         let mut fresh = false;
-        let maps: &[PlaneMap] = if self.options.indirect == Indirect::Maps {
+        let maps: &[VplMap] = if self.options.indirect == Indirect::Maps {
             self.vpl_cache.maps.get_or_init(|| {
                 fresh = true;
                 let planes = self.occluders().0;
                 // Maps in parallel as well as inside each build: a small map's build has too
                 // little work per parallel step to keep both cores busy alone.
                 vpls.par_iter()
-                    .map(|v| PlaneMap::build(&self.scene.positions, planes, v.position, v.normal, &opts.map))
+                    .map(|v| {
+                        VplMap::build(
+                            &self.scene.positions,
+                            planes,
+                            v.position,
+                            v.normal,
+                            &opts.map,
+                            opts.format,
+                        )
+                    })
                     .collect()
             })
         } else {
@@ -228,7 +240,7 @@ impl Vpls<'_> {
                         VplFilter::Texel => gather::pair,
                         VplFilter::Bilinear => gather::pair_bilinear,
                     };
-                    sum += v.intensity * pair(&self.consts[k], map.texels(), s.p, s.ns, s.ng);
+                    sum += v.intensity * pair(&self.consts[k], map, s.p, s.ns, s.ng);
                 }
                 None => {
                     let ray = spawn_ray_to(s.p, s.p_err, s.ng, v.position);
@@ -275,7 +287,7 @@ impl Vpls<'_> {
             let mut sums = Sums::default();
             sums.reset(pts.len());
             for vi in (q..self.vpls.len()).step_by(stride) {
-                gather::add_vpl(&self.consts[vi], self.maps[vi].texels(), pts, &mut sums);
+                gather::add_vpl(&self.consts[vi], &self.maps[vi], pts, &mut sums);
             }
             for (m, &j) in idx.iter().enumerate() {
                 out[j] = kd(&hits[j]) * FRAC_1_PI * sums.get(m) * stride as f32;
@@ -383,14 +395,10 @@ pub fn run(
                     let (q, sums) = (vi % (k * k), &mut sums[vi % (k * k)]);
                     pairs += groups[q].0.len() as u64;
                     match filter {
-                        VplFilter::Texel => gather::add_vpl(consts, map.texels(), &groups[q].1, sums),
-                        VplFilter::Bilinear => gather::add_vpl_with(
-                            gather::pair_bilinear,
-                            consts,
-                            map.texels(),
-                            &groups[q].1,
-                            sums,
-                        ),
+                        VplFilter::Texel => gather::add_vpl(consts, map, &groups[q].1, sums),
+                        VplFilter::Bilinear => {
+                            gather::add_vpl_with(gather::pair_bilinear, consts, map, &groups[q].1, sums)
+                        }
                     }
                 }
                 for ((group, _), sums) in groups.iter().zip(&sums) {

@@ -16,9 +16,16 @@ $H sweep scenes/office.toml --runs 5 --out docs/sweeps/office --base "--preset h
   --knob shadow-map-res=512,1024,2048 --knob tess=2,8,inf --knob dilate=0,1
 $H sweep scenes/conference.toml --runs 3 --out docs/sweeps/conference \
   --knob shadow-map-res=512,1024,2048 --knob bias=0.5,1,2 --knob borders=laplacian,depth
-$H sweep scenes/cornell-bunny-mirror.toml --runs 5 --out docs/sweeps/cornell-bunny-mirror-vpl \
-  --base "--preset hybrid --indirect maps --vpls 45" \
-  --knob vpl-map-res=256,512,1024 --knob interleave=1,2,4 --knob vpl-bias=0.25,0.5,1
-$H sweep scenes/office.toml --runs 5 --out docs/sweeps/office-vpl \
-  --base "--preset reference --indirect maps --vpls 45" \
-  --knob vpl-filter=texel,bilinear --knob vpl-map-res=512,1024,1536,2048
+# VPL maps, 45 VPLs, against VPL rays with the same direct light: format x resolution x filter.
+for s in cornell-bunny-mirror office conference; do
+  $H sweep scenes/$s.toml --runs 3 --out docs/sweeps/$s-vpl-maps \
+    --base "--preset hybrid --indirect maps --vpls 45" --reference "--preset hybrid --indirect rays --vpls 45" \
+    --knob vpl-format=planes,depth16 --knob vpl-map-res=256,512,1024 --knob vpl-filter=texel,bilinear
+done
+# Many VPLs: 256 on the conference room, interleaved, against all 256 by maps and by rays.
+$H sweep scenes/conference.toml --runs 5 --out docs/sweeps/conference-256-vpls \
+  --base "--preset hybrid --indirect maps --vpls 256" --reference "--preset hybrid --indirect maps --vpls 256 --interleave 1" \
+  --knob interleave=1,2,4 --knob vpl-map-res=256,512
+$H sweep scenes/conference.toml --runs 3 --out docs/sweeps/conference-256-vpls-vs-reference \
+  --base "--preset hybrid --indirect maps --vpls 256" --reference "--preset reference --indirect rays --vpls 256" \
+  --knob interleave=1,2,4 --knob vpl-map-res=256,512

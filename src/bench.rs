@@ -368,16 +368,19 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "| scene | fps ref | fps maps | speed-up | thesis fps ref / maps | PSNR | thesis PSNR | VPL shadow rays removed | thesis removed | indirect pass ms rays / maps | VPL map build ms | VPL maps MB |"
+        "| scene | fps ref | fps maps | speed-up | thesis fps ref / maps | PSNR | thesis PSNR | VPL shadow rays removed | thesis removed | indirect pass ms rays / maps | indirect speed-up | pairs | CPU ns per pair rays / maps | VPL map build ms | VPL maps MB |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    // CPU time of the indirect pass per (point, VPL) pair: wall time times the threads.
+    let threads = rayon::current_num_threads() as f64;
+    let per_pair = |ms: f64, pairs: u64| if pairs == 0 { 0.0 } else { ms * 1e6 * threads / pairs as f64 };
     for r in results {
         let (e, f) = (r.get("rt-vpl"), r.get("vpl-maps"));
         let ind = |m: &Measurement| m.pass_ms.get("indirect").copied().unwrap_or(0.0);
         let t = r.thesis.and_then(|t| t.t44);
         let _ = writeln!(
             s,
-            "| {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {:.0} | {:.0} |",
+            "| {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {} | {} | {:.1} / {:.2} | {:.0} | {:.1} |",
             r.scene,
             fps(e),
             fps(f),
@@ -389,6 +392,10 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             t.map_or("-".into(), |t| n(t.3)),
             ind(e),
             ind(f),
+            ratio(ind(e), ind(f)),
+            n(f.vpl_pairs),
+            per_pair(ind(e), e.vpl_pairs),
+            per_pair(ind(f), f.vpl_pairs),
             f.map_build_ms,
             f.map_bytes as f64 / 1e6,
         );
@@ -480,7 +487,7 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
 /// One row per scene and configuration.
 fn csv(results: &[SceneResult]) -> String {
     let mut s = String::from(
-        "scene,config,flags,fps_mean,frame_ms_median,frame_ms_mean,frame_ms_min,frame_ms_max,runs,first_frame_ms,map_build_ms,bvh_build_ms,map_bytes,psnr_db,wrong_pixels,wrong_pairs,rays_primary,rays_shadow,rays_shadow_hint_hits,rays_specular,rays_vpl_shadow,rays_vpl_path,rays_total\n",
+        "scene,config,flags,fps_mean,frame_ms_median,frame_ms_mean,frame_ms_min,frame_ms_max,runs,first_frame_ms,map_build_ms,bvh_build_ms,map_bytes,psnr_db,wrong_pixels,wrong_pairs,rays_primary,rays_shadow,rays_shadow_hint_hits,rays_specular,rays_vpl_shadow,rays_vpl_path,rays_total,vpl_pairs\n",
     );
     for r in results {
         for m in &r.configs {
@@ -489,7 +496,7 @@ fn csv(results: &[SceneResult]) -> String {
             let opt = |v: Option<u64>| v.map_or(String::new(), |v| v.to_string());
             let _ = writeln!(
                 s,
-                "{},{},\"{}\",{:.4},{:.3},{:.3},{:.3},{:.3},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},\"{}\",{:.4},{:.3},{:.3},{:.3},{:.3},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{}",
                 r.scene,
                 m.label,
                 flags,
@@ -516,7 +523,8 @@ fn csv(results: &[SceneResult]) -> String {
                 m.rays.specular,
                 m.rays.vpl_shadow,
                 m.rays.vpl_path,
-                m.rays.total
+                m.rays.total,
+                m.vpl_pairs
             );
         }
     }

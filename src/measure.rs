@@ -77,6 +77,8 @@ pub struct Measurement {
     pub rays: RayCountsJson,
     /// Memory of the light maps and VPL maps, in bytes.
     pub map_bytes: u64,
+    /// (camera point, VPL) pairs of the indirect pass per frame (`FrameStats::vpl_pairs`).
+    pub vpl_pairs: u64,
     /// Against the reference film, if one was given.
     pub psnr_db: Option<f64>,
     /// Map-based shadows with a check frame: (pixel, light) pairs whose map decision a shadow
@@ -166,6 +168,7 @@ pub fn measure(
                 bvh_build_ms: r.bvh_build_ms(),
                 rays: f.stats.rays.into(),
                 map_bytes: f.stats.lights.iter().map(|l| l.map_bytes).sum::<u64>() + f.stats.vpl_map_bytes,
+                vpl_pairs: f.stats.vpl_pairs,
                 psnr_db: None,
                 wrong_pairs: None,
                 wrong_pixels: None,

@@ -72,7 +72,9 @@
 //! point; the paraboloid's texel angle is `2 / (1 + u^2 + v^2) * 2 / res`, and
 //! `1 + u^2 + v^2 = 2 / (1 + a . w)` on the unit sphere). With planes: `s = g . w > 0` and
 //! `s (r - margin) > 1` ([`VplMap::occluded_by_plane`]); with depths:
-//! `s / scale * (min(t_own, r) - margin) > 1`.
+//! `s / scale * (min(t_own, r) - margin) > 1`, which [`VplMap::hidden_at`] evaluates without a
+//! division: with `cos_c = c / d` (`d = 1 + u^2 + v^2 > 0`), `t_own < r` exactly when
+//! `c > cos_g d`, and then the test is `s (r cos_g d - margin c) > c`.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -253,14 +255,21 @@ impl VplMap {
             Texels::Depth16 { inv_scale, bits } => {
                 let s = half_to_f32(bits[i]) * inv_scale;
                 let [t, b, a] = self.frame;
-                let (uc, vc, zc) = centre_uvz(self.resolution, x, y);
-                let f = 1.0 + zc;
+                // The centre's direction is (2u, 2v, 1 - u^2 - v^2) / (1 + u^2 + v^2) in the map
+                // frame: cos_c = c / d, and the test is multiplied through by d and c (no
+                // divisions; module docs).
+                let inv2 = 2.0 / self.resolution as f32;
+                let u = (x as f32 + 0.5) * inv2 - 1.0;
+                let v = 1.0 - (y as f32 + 0.5) * inv2;
+                let r2 = u * u + v * v;
+                let d = 1.0 + r2;
                 let nt = ng.x * t.x + ng.y * t.y + ng.z * t.z;
                 let nb = ng.x * b.x + ng.y * b.y + ng.z * b.z;
                 let na = ng.x * a.x + ng.y * a.y + ng.z * a.z;
-                let cos_c = -((nt * (uc * f) + nb * (vc * f)) + na * zc);
-                let t_cmp = r * (cos_g / cos_c.max(cos_g));
-                s > 0.0 && s * (t_cmp - margin) > 1.0
+                let c = -((nt * (u + u) + nb * (v + v)) + na * (1.0 - r2));
+                let beyond =
+                    if c > cos_g * d { s * (r * cos_g * d - margin * c) > c } else { s * (r - margin) > 1.0 };
+                s > 0.0 && beyond
             }
         }
     }

@@ -5,32 +5,55 @@ use std::f32::consts::FRAC_1_PI;
 use glam::Vec3;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
+use rayon::prelude::*;
+
+use super::gather::ShadePoint;
 use super::shadows::{PlaneSides, facing, light_geometry, viewer_side};
-use super::{Progress, Renderer, SurfaceHit, par_rows, shadows::Shadowing};
+use super::{Progress, Renderer, SurfaceHit, shadows::Shadowing};
 
 /// Shades every camera hit of the G-buffer with direct light, one shadow ray per light (the
 /// reference; map-based shadows shade in their classify pass, `shadows`).
-pub fn run(r: &Renderer, gbuffer: &[Option<Hit>], out: &mut [Vec3], progress: Progress) -> RayCounts {
+pub(crate) fn run(
+    r: &Renderer,
+    gbuffer: &[Option<Hit>],
+    out: &mut [Vec3],
+    points: Option<&mut [ShadePoint]>,
+    progress: Progress,
+) -> RayCounts {
     // `shade` with shadow rays, the plane side of each light kept for the row's last
     // triangle (`facing` asks it per pixel; it depends on the triangle and light only).
     let w = r.scene.settings.width as usize;
-    par_rows(out, w, progress, |y, row, c| {
-        let first = y as usize * w;
+    let row = |y: usize, row: &mut [Vec3], mut pts: Option<&mut [ShadePoint]>| {
+        let mut c = RayCounts::default();
+        let first = y * w;
         let mut sides = PlaneSides::new();
         let hits = &gbuffer[first..][..row.len()];
         for (x, (px, hit)) in row.iter_mut().zip(hits).enumerate() {
             let Some(hit) = hit else { continue };
-            let s = SurfaceHit::new(r.scene, hit, r.camera_ray(x as u32, y).dir);
+            let s = SurfaceHit::new(r.scene, hit, r.camera_ray(x as u32, y as u32).dir);
+            if let Some(pts) = pts.as_deref_mut()
+                && r.diffuse(s.tri)
+            {
+                pts[x] = ShadePoint::of(&s);
+            }
             let tri = &r.scene.positions[s.tri as usize];
-            let before = *c;
+            let before = c;
             let sides = sides.of(s.tri, tri, &r.scene.lights);
             *px = reflect(r, &s, |l, light| {
                 let g = light_geometry(&s, light)?;
-                (viewer_side(&s, tri, sides[l]) && shadow_ray(&s, &light.position, r, c)).then_some(g)
+                (viewer_side(&s, tri, sides[l]) && shadow_ray(&s, &light.position, r, &mut c)).then_some(g)
             });
-            r.pixel_rays.add(first + x, &before, c);
+            r.pixel_rays.add(first + x, &before, &c);
         }
-    })
+        progress();
+        c
+    };
+    let rows = out.par_chunks_mut(w.max(1)).enumerate();
+    let counts: Vec<RayCounts> = match points {
+        Some(p) => rows.zip(p.par_chunks_mut(w.max(1))).map(|((y, o), p)| row(y, o, Some(p))).collect(),
+        None => rows.map(|(y, o)| row(y, o, None)).collect(),
+    };
+    counts.into_iter().sum()
 }
 
 /// Whether a shadow ray from `s` reaches `light` (the reference's test).

@@ -22,8 +22,24 @@ use super::{SurfaceHit, vpl::Vpl};
 /// Points per vector.
 pub(crate) const LANES: usize = 8;
 
-/// Diffuse shading points in struct-of-arrays order, padded to a multiple of [`LANES`] with
-/// points that face nothing (zero normals).
+/// A diffuse shading point as the gather reads it (all zero where a pixel has none: zero
+/// normals face nothing). The frame's direct-light pass writes one per pixel when VPL maps
+/// will be gathered, so that the indirect pass does not make the shading points again.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ShadePoint {
+    pub p: Vec3,
+    pub ns: Vec3,
+    pub ng: Vec3,
+}
+
+impl ShadePoint {
+    pub fn of(s: &SurfaceHit) -> Self {
+        Self { p: s.p, ns: s.ns, ng: s.ng }
+    }
+}
+
+/// Diffuse shading points in struct-of-arrays order (zero normals: a point that faces
+/// nothing).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Points {
     pub p: [Vec<f32>; 3],
@@ -38,7 +54,7 @@ impl Points {
         Self { p: v(), ns: v(), ng: v() }
     }
 
-    pub fn push(&mut self, s: &SurfaceHit) {
+    pub fn push(&mut self, s: &ShadePoint) {
         self.push_raw(s.p, s.ns, s.ng);
     }
 
@@ -47,13 +63,6 @@ impl Points {
             self.p[i].push(p[i]);
             self.ns[i].push(ns[i]);
             self.ng[i].push(ng[i]);
-        }
-    }
-
-    /// Pads to a multiple of [`LANES`].
-    pub fn pad(&mut self) {
-        while !self.len().is_multiple_of(LANES) {
-            self.push_raw(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
         }
     }
 
@@ -205,23 +214,28 @@ pub(crate) fn pair_bilinear(c: &VplConsts, map: &VplMap, p: Vec3, ns: Vec3, ng: 
     ray.g * visible
 }
 
-/// Adds VPL `c`'s `I_v g_v` (visible pairs only) to `sums` for every point of `pts`.
+/// Adds VPL `c`'s `I_v g_v` (visible pairs only) to `sums` for every point of `pts`: whole
+/// vectors with the vector kernel where the CPU has it, the rest one by one (the same bits).
 pub(crate) fn add_vpl(c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
+    #[allow(unused_mut)]
+    let mut done = 0;
     #[cfg(target_arch = "x86_64")]
     if simd() {
+        done = pts.len() / LANES * LANES;
         // SAFETY: AVX2 and F16C are present (checked above); the kernels' loads stay within
-        // `pts` and `sums` (padded to whole vectors, asserted there) and their gathers within
-        // the map's texels (indices clamped to the resolution; see each kernel).
+        // the first `done` points of `pts` and `sums` (asserted there) and their gathers
+        // within the map's texels (indices clamped to the resolution; see each kernel).
         unsafe {
             match (map.planes(), map.depths()) {
-                (Some(g), _) => avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, sums),
-                (_, Some((bits, _))) => avx2::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, sums),
+                (Some(g), _) => avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums),
+                (_, Some((bits, _))) => {
+                    avx2::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
+                }
                 _ => {}
             }
         }
-        return;
     }
-    add_vpl_with(pair, c, map, pts, sums);
+    add_vpl_from(pair, c, map, pts, done, sums);
 }
 
 /// A kernel of one pair: [`pair`] or [`pair_bilinear`].
@@ -229,7 +243,12 @@ pub(crate) type PairFn = fn(&VplConsts, &VplMap, Vec3, Vec3, Vec3) -> f32;
 
 /// [`add_vpl`] one point at a time, with kernel `f`.
 pub(crate) fn add_vpl_with(f: PairFn, c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
-    for i in 0..pts.len() {
+    add_vpl_from(f, c, map, pts, 0, sums);
+}
+
+/// [`add_vpl_with`] from point `first` on.
+fn add_vpl_from(f: PairFn, c: &VplConsts, map: &VplMap, pts: &Points, first: usize, sums: &mut Sums) {
+    for i in first..pts.len() {
         let (p, ns, ng) = pts.get(i);
         let g = f(c, map, p, ns, ng);
         for k in 0..3 {
@@ -253,8 +272,8 @@ mod avx2 {
 
     use super::{LANES, Points, Sums, VplConsts};
 
-    /// [`super::pair`] on eight points at once, summed into `sums`: texels are planes (three
-    /// `f32` each) or, with `DEPTH16`, half floats.
+    /// [`super::pair`] on eight points at once for the first `n` points (a multiple of eight),
+    /// summed into `sums`: texels are planes (three `f32` each) or, with `DEPTH16`, half floats.
     ///
     /// # Safety
     /// AVX2 and F16C must be present; `texels` must point to `len` elements: `3 res^2` `f32`
@@ -266,10 +285,10 @@ mod avx2 {
         texels: *const f32,
         len: usize,
         pts: &Points,
+        n: usize,
         sums: &mut Sums,
     ) {
-        let n = pts.len();
-        assert!(n.is_multiple_of(LANES) && sums.0.iter().all(|s| s.len() == n));
+        assert!(n.is_multiple_of(LANES) && n <= pts.len() && sums.0.iter().all(|s| s.len() >= n));
         let texels_n = c.res as usize * c.res as usize;
         assert!(if DEPTH16 { len > texels_n } else { len == 3 * texels_n });
         let s = _mm256_set1_ps;
@@ -291,7 +310,7 @@ mod avx2 {
         let [ngx, ngy, ngz] = &pts.ng;
         let [sr, sg, sb] = &mut sums.0;
         for i in (0..n).step_by(LANES) {
-            // SAFETY (all loads and stores of the loop): `i + 8 <= n`, the length of every array.
+            // SAFETY (all loads and stores of the loop): `i + 8 <= n`, within every array.
             let ld = |v: &[f32]| unsafe { _mm256_loadu_ps(v.as_ptr().add(i)) };
             let dx = _mm256_sub_ps(ld(px), ox);
             let dy = _mm256_sub_ps(ld(py), oy);
@@ -347,31 +366,36 @@ mod avx2 {
                 let packed = _mm256_packus_epi32(_mm256_and_si256(word, low16), _mm256_setzero_si256());
                 let halves = _mm256_castsi256_si128(_mm256_permute4x64_epi64::<0b1000>(packed));
                 let sv = _mm256_mul_ps(_mm256_cvtph_ps(halves), inv_scale);
-                let uc =
+                // As `VplMap::hidden_at`: no divisions.
+                let u =
                     _mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(ix), halfpx), inv2), one);
-                let vc =
+                let v =
                     _mm256_sub_ps(one, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(iy), halfpx), inv2));
-                let r2 = _mm256_add_ps(_mm256_mul_ps(uc, uc), _mm256_mul_ps(vc, vc));
-                let zc = _mm256_div_ps(_mm256_sub_ps(one, r2), _mm256_add_ps(one, r2));
-                let f = _mm256_add_ps(one, zc);
+                let r2 = _mm256_add_ps(_mm256_mul_ps(u, u), _mm256_mul_ps(v, v));
+                let d = _mm256_add_ps(one, r2);
                 let nt = dot(tx, ty, tz, ngxv, ngyv, ngzv);
                 let nb = dot(bx, by, bz, ngxv, ngyv, ngzv);
                 let na = dot(ax, ay, az, ngxv, ngyv, ngzv);
-                let cos_c = _mm256_xor_ps(
+                let cc = _mm256_xor_ps(
                     _mm256_add_ps(
                         _mm256_add_ps(
-                            _mm256_mul_ps(nt, _mm256_mul_ps(uc, f)),
-                            _mm256_mul_ps(nb, _mm256_mul_ps(vc, f)),
+                            _mm256_mul_ps(nt, _mm256_add_ps(u, u)),
+                            _mm256_mul_ps(nb, _mm256_add_ps(v, v)),
                         ),
-                        _mm256_mul_ps(na, zc),
+                        _mm256_mul_ps(na, _mm256_sub_ps(one, r2)),
                     ),
                     sign,
                 );
-                let t_cmp = _mm256_mul_ps(r, _mm256_div_ps(cos_g, _mm256_max_ps(cos_c, cos_g)));
-                _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(sv, zero),
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sv, _mm256_sub_ps(t_cmp, margin)), one),
-                )
+                let near = _mm256_cmp_ps::<_CMP_GT_OQ>(cc, _mm256_mul_ps(cos_g, d));
+                let own = _mm256_cmp_ps::<_CMP_GT_OQ>(
+                    _mm256_mul_ps(
+                        sv,
+                        _mm256_sub_ps(_mm256_mul_ps(_mm256_mul_ps(r, cos_g), d), _mm256_mul_ps(margin, cc)),
+                    ),
+                    cc,
+                );
+                let point = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sv, _mm256_sub_ps(r, margin)), one);
+                _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(sv, zero), _mm256_blendv_ps(point, own, near))
             } else {
                 let idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
                 // SAFETY: facing lanes' indices are below `res^2`, so every gathered float lies
@@ -476,7 +500,6 @@ mod tests {
                 let ns = (n + Vec3::new(0.1, 0.0, -0.1)).normalize();
                 pts.push_raw(p, ns, n);
             }
-            pts.pad();
             let (mut a, mut b) = (Sums::default(), Sums::default());
             a.reset(pts.len());
             b.reset(pts.len());

@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::plan::FrameDecision;
 
-use super::gather::{self, Points, Sums, VplConsts};
+use super::gather::{self, Points, ShadePoint, Sums, VplConsts};
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
 
 /// The knobs of indirect light.
@@ -275,7 +275,7 @@ impl Vpls<'_> {
         for (j, (s, &q)) in hits.iter().zip(subsets).enumerate() {
             if kd(s) != Vec3::ZERO {
                 groups[q % stride].0.push(j);
-                groups[q % stride].1.push(s);
+                groups[q % stride].1.push(&ShadePoint::of(s));
             }
         }
         let mut out = vec![Vec3::ZERO; hits.len()];
@@ -283,7 +283,6 @@ impl Vpls<'_> {
             if idx.is_empty() {
                 continue;
             }
-            pts.pad();
             let mut sums = Sums::default();
             sums.reset(pts.len());
             for vi in (q..self.vpls.len()).step_by(stride) {
@@ -321,10 +320,14 @@ impl Vpls<'_> {
 /// window around each pixel (which holds every subset once) then averages the estimates of
 /// the window's pixels on the same surface: shading normals within 25 degrees and camera
 /// distances within 5 %. Mirror hits always use every VPL.
-pub fn run(
+///
+/// `points`, when the direct-light pass has made them (with maps only), are the pixels'
+/// shading points; otherwise this pass makes them.
+pub(crate) fn run(
     r: &Renderer,
     v: &Vpls,
     gbuffer: &[Option<Hit>],
+    points: Option<&[ShadePoint]>,
     out: &mut [Vec3],
     progress: Progress,
 ) -> (RayCounts, u64) {
@@ -362,12 +365,22 @@ pub fn run(
                 (0..k * k).map(|_| (Vec::with_capacity(room), Points::with_capacity(room))).collect();
             for (j, (acc, geo)) in irr.iter_mut().zip(geo.iter_mut()).enumerate() {
                 let i = first + j;
+                if let Some(points) = points.filter(|_| !v.maps.is_empty()) {
+                    let (sp, Some(h)) = (&points[i], &gbuffer[i]) else { continue };
+                    if sp.ns != Vec3::ZERO {
+                        *geo = [sp.ns.x, sp.ns.y, sp.ns.z, h.t];
+                        let (group, pts) = &mut groups[Vpls::subset_of(i, w, k).0];
+                        group.push(j);
+                        pts.push(sp);
+                    }
+                    continue;
+                }
                 let Some(s) = diffuse(i) else { continue };
                 *geo = [s.ns.x, s.ns.y, s.ns.z, s.t];
                 if !v.maps.is_empty() {
-                    let (group, points) = &mut groups[Vpls::subset_of(i, w, k).0];
+                    let (group, pts) = &mut groups[Vpls::subset_of(i, w, k).0];
                     group.push(j);
-                    points.push(&s);
+                    pts.push(&ShadePoint::of(&s));
                     continue;
                 }
                 let before = c;
@@ -383,9 +396,8 @@ pub fn run(
             }
             if !v.maps.is_empty() {
                 let mut sums: Vec<Sums> = groups
-                    .iter_mut()
+                    .iter()
                     .map(|(_, p)| {
-                        p.pad();
                         let mut s = Sums::default();
                         s.reset(p.len());
                         s
@@ -506,6 +518,36 @@ mod tests {
                     .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits))
             );
             assert!(one.iter().filter(|v| **v != Vec3::ZERO).count() > hits.len() / 2);
+        }
+    }
+
+    /// The shading points the direct-light pass makes (the reference's `direct`, the hybrid's
+    /// `classify`) give the indirect pass the bytes it gets making them itself.
+    #[test]
+    fn shading_points_from_the_direct_pass_change_nothing() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        (scene.settings.width, scene.settings.height) = (48, 36);
+        for hybrid in [false, true] {
+            let mut o = if hybrid { Options::hybrid() } else { Options::reference() };
+            o.indirect = Indirect::Maps;
+            o.indirect_opts.map.resolution = 64;
+            let r = Renderer::new(&scene, o);
+            let v = r.vpls(&mut FrameStats::default());
+            let (gbuffer, _) = r.visibility();
+            let n = gbuffer.len();
+            let (mut direct, mut points) = (vec![Vec3::ZERO; n], vec![ShadePoint::default(); n]);
+            if hybrid {
+                r.shadowing(&gbuffer, &mut direct, Some(&mut points), &|| {}, &mut FrameStats::default());
+            } else {
+                crate::render::direct::run(&r, &gbuffer, &mut direct, Some(&mut points), &|| {});
+            }
+            assert!(points.iter().filter(|p| p.ns != Vec3::ZERO).count() > n / 2);
+            let (mut a, mut b) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+            run(&r, &v, &gbuffer, Some(&points), &mut a, &|| {});
+            run(&r, &v, &gbuffer, None, &mut b, &|| {});
+            let bits = |x: &[Vec3]| x.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "hybrid: {hybrid}");
+            assert!(a.iter().filter(|p| **p != Vec3::ZERO).count() > n / 2);
         }
     }
 }

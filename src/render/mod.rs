@@ -375,6 +375,11 @@ impl<'a> Renderer<'a> {
 
     /// The camera ray through the centre of pixel `(x, y)`.
     #[inline]
+    /// Whether triangle `tri`'s material reflects diffusely (indirect light reaches it).
+    pub(crate) fn diffuse(&self, tri: u32) -> bool {
+        self.scene.materials[self.scene.material[tri as usize] as usize].diffuse != Vec3::ZERO
+    }
+
     pub fn camera_ray(&self, x: u32, y: u32) -> Ray {
         Ray::new(self.camera.eye, self.camera.direction(x, y).normalize(), f32::INFINITY)
     }
@@ -428,10 +433,18 @@ impl<'a> Renderer<'a> {
         stats.record(Pass::Visibility, t);
 
         let mut direct = vec![Vec3::ZERO; n];
+        // The diffuse shading points, made by the direct-light pass for the VPL maps' gather.
+        let mut points = (self.plan.runs(Pass::Indirect) && self.options.indirect == Indirect::Maps)
+            .then(|| vec![gather::ShadePoint::default(); n]);
         let mut shadowing = None;
-        if self.plan.runs(Pass::Direct) || self.plan.runs(Pass::Classify) {
+        let shades = self.plan.runs(Pass::Direct) || self.plan.runs(Pass::Classify);
+        if !shades {
+            points = None;
+        }
+        if shades {
             if self.options.shadows != Shadows::Rays {
-                let mut s = self.shadowing(&gbuffer, &mut direct, progress, &mut stats);
+                let mut s =
+                    self.shadowing(&gbuffer, &mut direct, points.as_deref_mut(), progress, &mut stats);
                 let t = Instant::now();
                 stats.rays += s.trace(self, &gbuffer, &mut direct, self.options.check_visibility);
                 stats.record(Pass::ShadowRays, t);
@@ -439,7 +452,7 @@ impl<'a> Renderer<'a> {
                 shadowing = Some(s);
             } else {
                 let t = Instant::now();
-                stats.rays += direct::run(self, &gbuffer, &mut direct, progress);
+                stats.rays += direct::run(self, &gbuffer, &mut direct, points.as_deref_mut(), progress);
                 stats.record(Pass::Direct, t);
             }
         }
@@ -448,7 +461,7 @@ impl<'a> Renderer<'a> {
         let vpls = self.plan.runs(Pass::Indirect).then(|| self.vpls(&mut stats));
         if let Some(v) = &vpls {
             let t = Instant::now();
-            let (rays, pairs) = indirect::run(self, v, &gbuffer, &mut indirect, progress);
+            let (rays, pairs) = indirect::run(self, v, &gbuffer, points.as_deref(), &mut indirect, progress);
             stats.rays += rays;
             stats.vpl_pairs = pairs;
             stats.record(Pass::Indirect, t);

@@ -37,7 +37,11 @@ use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::gather::ShadePoint;
 use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit};
+
+/// One band of classify's outputs: direct light, and the face, lit and edge bits.
+type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
 use crate::{plan::FrameDecision, scene::PointLight};
 
 /// Whether `light` can light `hit` at all (a light with some intensity, strictly in front of
@@ -385,6 +389,7 @@ impl Renderer<'_> {
         &'r self,
         gbuffer: &[Option<Hit>],
         direct: &mut [Vec3],
+        points: Option<&mut [ShadePoint]>,
         progress: super::Progress,
         stats: &mut FrameStats,
     ) -> Shadowing<'r> {
@@ -414,94 +419,104 @@ impl Renderer<'_> {
             .zip(bufs.faces.bits.par_chunks_mut(band * stride))
             .zip(bufs.lit.bits.par_chunks_mut(band * stride))
             .zip(bufs.edge.bits.par_chunks_mut(band * stride));
-        let counts: Vec<Vec<[u64; 3]>> = bands
-            .enumerate()
-            .map(|(b, (((out, faces), lit), edge))| {
-                let first = b * band;
-                let rows = out.len() / w.max(1);
-                let mut counts = vec![[0u64; 3]; nl];
-                // Per tile: the shading points and the lights they face, then per light every
-                // point's location (prefetching its texels, so that the tile's cache misses
-                // overlap) and decision, then the points' direct light from those decisions.
-                let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
-                let mut located = Vec::with_capacity(TILE * TILE);
-                let mut sides = PlaneSides::new();
-                for x0 in (0..w).step_by(TILE) {
-                    tile.clear();
-                    let x1 = (x0 + TILE).min(w);
-                    for y in 0..rows {
-                        for j in y * w + x0..y * w + x1 {
-                            out[j] = Vec3::ZERO;
-                            let Some(s) = self.shading_point(gbuffer, first + j) else { continue };
-                            let tri = &self.scene.positions[s.tri as usize];
-                            let sd = sides.of(s.tri, tri, lights);
-                            let bits = &mut faces[j * stride..][..stride];
-                            for (l, light) in lights.iter().enumerate() {
-                                // `facing`, with the plane side reused.
-                                if light_geometry(&s, light).is_some() && viewer_side(&s, tri, sd[l]) {
-                                    bits[l / 8] |= 1 << (l % 8);
-                                }
-                            }
-                            tile.push((j, s));
+        let band_fn = |b: usize, (((out, faces), lit), edge): Band, mut pts: Option<&mut [ShadePoint]>| {
+            let first = b * band;
+            let rows = out.len() / w.max(1);
+            let mut counts = vec![[0u64; 3]; nl];
+            // Per tile: the shading points and the lights they face, then per light every
+            // point's location (prefetching its texels, so that the tile's cache misses
+            // overlap) and decision, then the points' direct light from those decisions.
+            let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
+            let mut located = Vec::with_capacity(TILE * TILE);
+            let mut sides = PlaneSides::new();
+            for x0 in (0..w).step_by(TILE) {
+                tile.clear();
+                let x1 = (x0 + TILE).min(w);
+                for y in 0..rows {
+                    for j in y * w + x0..y * w + x1 {
+                        out[j] = Vec3::ZERO;
+                        let Some(s) = self.shading_point(gbuffer, first + j) else { continue };
+                        if let Some(pts) = pts.as_deref_mut()
+                            && self.diffuse(s.tri)
+                        {
+                            pts[j] = ShadePoint::of(&s);
                         }
-                    }
-                    // A tile wholly on one plane (triangles of one group): its corner points may
-                    // decide a light at once (`Classifier::hull`).
-                    let group = |s: &SurfaceHit| groups[s.tri as usize];
-                    let one_plane = tile.len() == rows * (x1 - x0)
-                        && tile.iter().all(|(_, s)| group(s) == group(&tile[0].1));
-                    let corners = one_plane.then(|| {
-                        let k = tile.len() - 1;
-                        [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
-                    });
-                    for (l, c) in cls.iter().enumerate() {
-                        let (byte, bit) = (l / 8, 1u8 << (l % 8));
-                        let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
-                            let own = tile[0].1.tri;
-                            c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)))
-                        });
-                        if hull != Hull::Unknown {
-                            let lit_all = hull == Hull::Lit;
-                            for (j, _) in &tile {
-                                if faces[j * stride + byte] & bit != 0 {
-                                    lit[j * stride + byte] |= if lit_all { bit } else { 0 };
-                                    counts[l][usize::from(!lit_all)] += 1;
-                                    counts[l][2] += 1;
-                                }
-                            }
-                            continue;
-                        }
-                        located.clear();
-                        for (k, (j, s)) in tile.iter().enumerate() {
-                            if faces[j * stride + byte] & bit != 0 {
-                                let m = c.locate(s.p);
-                                c.prefetch(m);
-                                located.push((k, m));
+                        let tri = &self.scene.positions[s.tri as usize];
+                        let sd = sides.of(s.tri, tri, lights);
+                        let bits = &mut faces[j * stride..][..stride];
+                        for (l, light) in lights.iter().enumerate() {
+                            // `facing`, with the plane side reused.
+                            if light_geometry(&s, light).is_some() && viewer_side(&s, tri, sd[l]) {
+                                bits[l / 8] |= 1 << (l % 8);
                             }
                         }
-                        for &(k, m) in &located {
-                            let (j, s) = &tile[k];
-                            let lk = c.classify_at(s.p, s.tri, m);
-                            if lk.decision == LIT {
-                                lit[j * stride + byte] |= bit;
-                            }
-                            counts[l][usize::from(lk.decision != LIT)] += 1;
-                            if lk.map_border {
-                                edge[j * stride + byte] |= bit;
-                            }
-                        }
-                    }
-                    for (j, s) in &tile {
-                        let lb = &lit[j * stride..][..stride];
-                        out[*j] = super::direct::reflect(self, s, |l, light| {
-                            if bit(lb, l) { light_geometry(s, light) } else { None }
-                        });
+                        tile.push((j, s));
                     }
                 }
-                (0..rows).for_each(|_| progress());
-                counts
-            })
-            .collect();
+                // A tile wholly on one plane (triangles of one group): its corner points may
+                // decide a light at once (`Classifier::hull`).
+                let group = |s: &SurfaceHit| groups[s.tri as usize];
+                let one_plane =
+                    tile.len() == rows * (x1 - x0) && tile.iter().all(|(_, s)| group(s) == group(&tile[0].1));
+                let corners = one_plane.then(|| {
+                    let k = tile.len() - 1;
+                    [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
+                });
+                for (l, c) in cls.iter().enumerate() {
+                    let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
+                        let own = tile[0].1.tri;
+                        c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)))
+                    });
+                    if hull != Hull::Unknown {
+                        let lit_all = hull == Hull::Lit;
+                        for (j, _) in &tile {
+                            if faces[j * stride + byte] & bit != 0 {
+                                lit[j * stride + byte] |= if lit_all { bit } else { 0 };
+                                counts[l][usize::from(!lit_all)] += 1;
+                                counts[l][2] += 1;
+                            }
+                        }
+                        continue;
+                    }
+                    located.clear();
+                    for (k, (j, s)) in tile.iter().enumerate() {
+                        if faces[j * stride + byte] & bit != 0 {
+                            let m = c.locate(s.p);
+                            c.prefetch(m);
+                            located.push((k, m));
+                        }
+                    }
+                    for &(k, m) in &located {
+                        let (j, s) = &tile[k];
+                        let lk = c.classify_at(s.p, s.tri, m);
+                        if lk.decision == LIT {
+                            lit[j * stride + byte] |= bit;
+                        }
+                        counts[l][usize::from(lk.decision != LIT)] += 1;
+                        if lk.map_border {
+                            edge[j * stride + byte] |= bit;
+                        }
+                    }
+                }
+                for (j, s) in &tile {
+                    let lb = &lit[j * stride..][..stride];
+                    out[*j] = super::direct::reflect(self, s, |l, light| {
+                        if bit(lb, l) { light_geometry(s, light) } else { None }
+                    });
+                }
+            }
+            (0..rows).for_each(|_| progress());
+            counts
+        };
+        let counts: Vec<Vec<[u64; 3]>> = match points {
+            Some(p) => bands
+                .zip(p.par_chunks_mut(band))
+                .enumerate()
+                .map(|(b, (x, p))| band_fn(b, x, Some(p)))
+                .collect(),
+            None => bands.enumerate().map(|(b, x)| band_fn(b, x, None)).collect(),
+        };
         let map_counts = sum_per_light(counts, nl);
         stats.record(super::Pass::Classify, t);
 

@@ -254,7 +254,7 @@ mod tests {
             let (g, _) = r.visibility();
             let sh = (o.shadows != crate::render::Shadows::Rays).then(|| {
                 let mut direct = vec![Vec3::ZERO; g.len()];
-                let mut sh = r.shadowing(&g, &mut direct, &|| {}, &mut stats);
+                let mut sh = r.shadowing(&g, &mut direct, None, &|| {}, &mut stats);
                 sh.trace(&r, &g, &mut direct, false);
                 sh
             });

@@ -54,6 +54,22 @@ impl Points {
         Self { p: v(), ns: v(), ng: v() }
     }
 
+    /// Replaces the points with `pts`, in order (a transpose).
+    pub fn set(&mut self, pts: &[ShadePoint]) {
+        let [px, py, pz] = &mut self.p;
+        let [sx, sy, sz] = &mut self.ns;
+        let [gx, gy, gz] = &mut self.ng;
+        for v in [&mut *px, py, pz, sx, sy, sz, gx, gy, gz] {
+            v.clear();
+            v.resize(pts.len(), 0.0);
+        }
+        for (i, s) in pts.iter().enumerate() {
+            (px[i], py[i], pz[i]) = (s.p.x, s.p.y, s.p.z);
+            (sx[i], sy[i], sz[i]) = (s.ns.x, s.ns.y, s.ns.z);
+            (gx[i], gy[i], gz[i]) = (s.ng.x, s.ng.y, s.ng.z);
+        }
+    }
+
     pub fn push(&mut self, s: &ShadePoint) {
         self.push_raw(s.p, s.ns, s.ng);
     }

@@ -334,6 +334,9 @@ pub(crate) fn run(
     let w = r.scene.settings.width.max(1) as usize;
     let k = r.options.indirect_opts.interleave.max(1) as usize;
     let n = out.len();
+    if let Some(points) = points.filter(|_| k == 1 && !v.maps.is_empty()) {
+        return gather_all(r, v, gbuffer, points, out, progress);
+    }
     let takes = |i: usize, vpl: usize| k == 1 || vpl % (k * k) == Vpls::subset_of(i, w, k).0;
     // Per pixel: the VPL sum, and what the interleaving filter compares (the shading normal
     // and the camera distance; distance 0 where the pixel has no diffuse point).
@@ -439,6 +442,55 @@ pub(crate) fn run(
         c += d;
         (c, n + m)
     })
+}
+
+/// [`run`] without interleaving, from the direct-light pass's shading points: a band of
+/// pixels at a time, all of them in order (those without a diffuse point face nothing), so
+/// the points need only a transpose and the sums land on their pixels, which are shaded at
+/// once: no frame-sized buffers besides `out`.
+fn gather_all(
+    r: &Renderer,
+    v: &Vpls,
+    gbuffer: &[Option<Hit>],
+    points: &[ShadePoint],
+    out: &mut [Vec3],
+    progress: Progress,
+) -> (RayCounts, u64) {
+    let w = r.scene.settings.width.max(1) as usize;
+    const BAND: usize = 4;
+    let filter = r.options.indirect_opts.filter;
+    let pairs: u64 = out
+        .par_chunks_mut(w * BAND)
+        .zip(points.par_chunks(w * BAND))
+        .zip(gbuffer.par_chunks(w * BAND))
+        .map(|((out, points), hits)| {
+            let mut pts = Points::with_capacity(points.len());
+            pts.set(points);
+            let mut sums = Sums::default();
+            sums.reset(pts.len());
+            for (consts, map) in v.consts.iter().zip(v.maps) {
+                match filter {
+                    VplFilter::Texel => gather::add_vpl(consts, map, &pts, &mut sums),
+                    VplFilter::Bilinear => {
+                        gather::add_vpl_with(gather::pair_bilinear, consts, map, &pts, &mut sums)
+                    }
+                }
+            }
+            let mut diffuse = 0u64;
+            for (j, (o, (p, h))) in out.iter_mut().zip(points.iter().zip(hits)).enumerate() {
+                if let (Some(h), true) = (h, p.ns != Vec3::ZERO) {
+                    let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
+                    *o = kd * FRAC_1_PI * sums.get(j);
+                    diffuse += 1;
+                }
+            }
+            for _ in 0..out.len() / w {
+                progress();
+            }
+            diffuse * v.vpls.len() as u64
+        })
+        .sum();
+    (RayCounts::default(), pairs)
 }
 
 /// The geometry-aware `k x k` box filter of interleaved sampling (see [`run`]), on the

@@ -3,10 +3,10 @@
 //!
 //! It is the inner loop of indirect light (points times VPLs), so it is laid out for it: the
 //! points in struct-of-arrays order ([`Points`]), one VPL's constants broadcast
-//! ([`VplConsts`]), and eight points at a time with AVX2 (and F16C) where the CPU has them. The
-//! scalar [`pair`] performs the same `f32` operations in the same order (no fused
-//! multiply-adds, IEEE square roots and divisions, exact half-float conversions), so both give
-//! the same bytes; the tests hold them to it.
+//! ([`VplConsts`]), and sixteen points at a time with AVX-512, or eight with AVX2 and F16C,
+//! where the CPU has them ([`Kernel`]). The scalar [`pair`] performs the same `f32` operations
+//! in the same order (no fused multiply-adds, IEEE square roots and divisions, exact
+//! half-float conversions), so all give the same bytes; the tests hold them to it.
 //!
 //! Per pair, with `w = (p - o) / r` the unit direction from the VPL at `o` to the point `p`:
 //! `cos_x = -n_s . w`, `cos_g = -n_g . w` (the geometric normal: the point must face the VPL),
@@ -19,7 +19,7 @@ use hyrt_shadowmap::vpl_map::VplMap;
 
 use super::{SurfaceHit, vpl::Vpl};
 
-/// Points per vector.
+/// Points per vector of the AVX2 kernel.
 pub(crate) const LANES: usize = 8;
 
 /// A diffuse shading point as the gather reads it (all zero where a pixel has none: zero
@@ -230,21 +230,76 @@ pub(crate) fn pair_bilinear(c: &VplConsts, map: &VplMap, p: Vec3, ns: Vec3, ng: 
     ray.g * visible
 }
 
-/// Adds VPL `c`'s `I_v g_v` (visible pairs only) to `sums` for every point of `pts`: whole
-/// vectors with the vector kernel where the CPU has it, the rest one by one (the same bits).
+/// Adds VPL `c`'s `I_v g_v` (visible pairs only) to `sums` for every point of `pts`, with the
+/// widest kernel the CPU has ([`Kernel::best`]).
 pub(crate) fn add_vpl(c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
+    add_vpl_on(Kernel::best(), c, map, pts, sums);
+}
+
+/// The ways to run [`add_vpl`]; all give the same bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kernel {
+    Scalar,
+    /// Eight pairs per vector (AVX2 and F16C).
+    Avx2,
+    /// Sixteen pairs per vector (AVX-512F).
+    Avx512,
+}
+
+impl Kernel {
+    /// The kernels this CPU can run, narrowest first.
+    pub fn available() -> Vec<Kernel> {
+        let mut k = vec![Kernel::Scalar];
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") && has!("f16c") {
+                k.push(Kernel::Avx2);
+            }
+            if has!("avx512f") {
+                k.push(Kernel::Avx512);
+            }
+        }
+        k
+    }
+
+    /// The widest of [`Kernel::available`] (detected once).
+    pub fn best() -> Kernel {
+        static BEST: std::sync::OnceLock<Kernel> = std::sync::OnceLock::new();
+        *BEST.get_or_init(|| *Kernel::available().last().expect("the scalar kernel is always there"))
+    }
+}
+
+/// [`add_vpl`] with kernel `k`: whole vectors with it, the rest one point at a time.
+///
+/// # Panics
+/// If this CPU cannot run `k` (not in [`Kernel::available`]).
+pub(crate) fn add_vpl_on(k: Kernel, c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
+    assert!(k == Kernel::Scalar || Kernel::available().contains(&k), "{k:?} is not available on this CPU");
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if simd() {
-        done = pts.len() / LANES * LANES;
-        // SAFETY: AVX2 and F16C are present (checked above); the kernels' loads stay within
-        // the first `done` points of `pts` and `sums` (asserted there) and their gathers
+    {
+        let (planes, depths) = (map.planes(), map.depths());
+        // SAFETY: the kernel's features are present (asserted above); the kernels' loads stay
+        // within the first `done` points of `pts` and `sums` (asserted there) and their gathers
         // within the map's texels (indices clamped to the resolution; see each kernel).
         unsafe {
-            match (map.planes(), map.depths()) {
-                (Some(g), _) => avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums),
-                (_, Some((bits, _))) => {
+            match (k, planes, depths) {
+                (Kernel::Avx512, Some(g), _) => {
+                    done = pts.len() / avx512::LANES * avx512::LANES;
+                    avx512::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
+                }
+                (Kernel::Avx512, _, Some((bits, _))) => {
+                    done = pts.len() / avx512::LANES * avx512::LANES;
+                    avx512::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
+                }
+                (Kernel::Avx2, Some(g), _) => {
+                    done = pts.len() / LANES * LANES;
+                    avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
+                }
+                (Kernel::Avx2, _, Some((bits, _))) => {
+                    done = pts.len() / LANES * LANES;
                     avx2::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
                 }
                 _ => {}
@@ -271,15 +326,6 @@ fn add_vpl_from(f: PairFn, c: &VplConsts, map: &VplMap, pts: &Points, first: usi
             sums.0[k][i] += c.intensity[k] * g;
         }
     }
-}
-
-/// Whether the vector kernels run on this CPU (AVX2 and F16C).
-#[cfg(target_arch = "x86_64")]
-pub(crate) fn simd() -> bool {
-    static HAS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *HAS.get_or_init(|| {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("f16c")
-    })
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -441,6 +487,156 @@ mod avx2 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::{Points, Sums, VplConsts};
+
+    /// Points per vector.
+    pub(super) const LANES: usize = 16;
+
+    /// [`super::pair`] on sixteen points at once for the first `n` points (a multiple of 16),
+    /// summed into `sums`: texels are planes (three `f32` each) or, with `DEPTH16`, half floats.
+    ///
+    /// # Safety
+    /// AVX-512F must be present; `texels` must point to `len` elements: `3 res^2` `f32`
+    /// for planes, or more than `res^2` `u16` for half floats (the padding element keeps a
+    /// 4-byte load at the last texel in bounds).
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn add_vpl<const DEPTH16: bool>(
+        c: &VplConsts,
+        texels: *const f32,
+        len: usize,
+        pts: &Points,
+        n: usize,
+        sums: &mut Sums,
+    ) {
+        assert!(n.is_multiple_of(LANES) && n <= pts.len() && sums.0.iter().all(|s| s.len() >= n));
+        let texels_n = c.res as usize * c.res as usize;
+        assert!(if DEPTH16 { len > texels_n } else { len == 3 * texels_n });
+        let s = _mm512_set1_ps;
+        let (ox, oy, oz) = (s(c.o.x), s(c.o.y), s(c.o.z));
+        let (tx, ty, tz) = (s(c.t.x), s(c.t.y), s(c.t.z));
+        let (bx, by, bz) = (s(c.b.x), s(c.b.y), s(c.b.z));
+        let (ax, ay, az) = (s(c.a.x), s(c.a.y), s(c.a.z));
+        let (ir, ig, ib) = (s(c.intensity.x), s(c.intensity.y), s(c.intensity.z));
+        let (clamp2, bias_k, e, half, last) = (s(c.clamp2), s(c.bias_k), s(c.e), s(c.half), s(c.last));
+        let (zero, one, tol) = (s(0.0), s(1.0), s(c.tol));
+        let sign = _mm512_set1_epi32(i32::MIN);
+        let neg = |x: __m512| _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(x), sign));
+        let (inv_scale, inv2, halfpx) = (s(c.inv_scale), s(2.0 / c.res as f32), s(0.5));
+        let res = _mm512_set1_epi32(c.res as i32);
+        let low16 = _mm512_set1_epi32(0xffff);
+        let dot = |x: __m512, y: __m512, z: __m512, a: __m512, b: __m512, c: __m512| {
+            _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(a, x), _mm512_mul_ps(b, y)), _mm512_mul_ps(c, z))
+        };
+        let [px, py, pz] = &pts.p;
+        let [nsx, nsy, nsz] = &pts.ns;
+        let [ngx, ngy, ngz] = &pts.ng;
+        let [sr, sg, sb] = &mut sums.0;
+        for i in (0..n).step_by(LANES) {
+            // SAFETY (all loads and stores of the loop): `i + 16 <= n`, within every array.
+            let ld = |v: &[f32]| unsafe { _mm512_loadu_ps(v.as_ptr().add(i)) };
+            let dx = _mm512_sub_ps(ld(px), ox);
+            let dy = _mm512_sub_ps(ld(py), oy);
+            let dz = _mm512_sub_ps(ld(pz), oz);
+            let d2 = _mm512_add_ps(
+                _mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)),
+                _mm512_mul_ps(dz, dz),
+            );
+            let r = _mm512_sqrt_ps(d2);
+            let inv = _mm512_div_ps(one, r);
+            let (wx, wy, wz) = (_mm512_mul_ps(dx, inv), _mm512_mul_ps(dy, inv), _mm512_mul_ps(dz, inv));
+            let (ngxv, ngyv, ngzv) = (ld(ngx), ld(ngy), ld(ngz));
+            let cos_x = neg(dot(wx, wy, wz, ld(nsx), ld(nsy), ld(nsz)));
+            let cos_g = neg(dot(wx, wy, wz, ngxv, ngyv, ngzv));
+            let cos_v = dot(wx, wy, wz, ax, ay, az);
+            let faces = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos_x, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos_g, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos_v, zero);
+            if faces == 0 {
+                continue;
+            }
+            let m2 = _mm512_max_ps(d2, clamp2);
+            let q = _mm512_div_ps(one, _mm512_mul_ps(cos_g, m2));
+            let g = _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(cos_x, cos_v), cos_g), q);
+            let den = _mm512_add_ps(one, cos_v);
+            let iden = _mm512_div_ps(one, den);
+            let u = _mm512_mul_ps(dot(wx, wy, wz, tx, ty, tz), iden);
+            let v = _mm512_mul_ps(dot(wx, wy, wz, bx, by, bz), iden);
+            let margin = _mm512_add_ps(
+                _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(bias_k, den), r), _mm512_mul_ps(tol, r)),
+                _mm512_add_ps(e, _mm512_mul_ps(_mm512_mul_ps(e, m2), q)),
+            );
+            // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
+            let fx = _mm512_min_ps(_mm512_max_ps(_mm512_mul_ps(_mm512_add_ps(u, one), half), zero), last);
+            let fy = _mm512_min_ps(_mm512_max_ps(_mm512_mul_ps(_mm512_sub_ps(one, v), half), zero), last);
+            let (ix, iy) = (_mm512_cvttps_epi32(fx), _mm512_cvttps_epi32(fy));
+            let idx = _mm512_add_epi32(_mm512_mullo_epi32(iy, res), ix);
+            let hidden = if DEPTH16 {
+                // SAFETY: facing lanes' indices are below `res^2`, and a 4-byte load at half
+                // float `idx` ends within the padded array; other lanes are masked off.
+                let word = unsafe {
+                    _mm512_mask_i32gather_epi32::<2>(_mm512_setzero_si512(), faces, idx, texels.cast())
+                };
+                let halves = _mm512_cvtepi32_epi16(_mm512_and_si512(word, low16));
+                let sv = _mm512_mul_ps(_mm512_cvtph_ps(halves), inv_scale);
+                // As `VplMap::hidden_at`: no divisions.
+                let u =
+                    _mm512_sub_ps(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(ix), halfpx), inv2), one);
+                let v =
+                    _mm512_sub_ps(one, _mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(iy), halfpx), inv2));
+                let r2 = _mm512_add_ps(_mm512_mul_ps(u, u), _mm512_mul_ps(v, v));
+                let d = _mm512_add_ps(one, r2);
+                let nt = dot(tx, ty, tz, ngxv, ngyv, ngzv);
+                let nb = dot(bx, by, bz, ngxv, ngyv, ngzv);
+                let na = dot(ax, ay, az, ngxv, ngyv, ngzv);
+                let cc = neg(_mm512_add_ps(
+                    _mm512_add_ps(
+                        _mm512_mul_ps(nt, _mm512_add_ps(u, u)),
+                        _mm512_mul_ps(nb, _mm512_add_ps(v, v)),
+                    ),
+                    _mm512_mul_ps(na, _mm512_sub_ps(one, r2)),
+                ));
+                let near = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cc, _mm512_mul_ps(cos_g, d));
+                let own = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(
+                    _mm512_mul_ps(
+                        sv,
+                        _mm512_sub_ps(_mm512_mul_ps(_mm512_mul_ps(r, cos_g), d), _mm512_mul_ps(margin, cc)),
+                    ),
+                    cc,
+                );
+                let point =
+                    _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_mul_ps(sv, _mm512_sub_ps(r, margin)), one);
+                _mm512_cmp_ps_mask::<_CMP_GT_OQ>(sv, zero) & ((own & near) | (point & !near))
+            } else {
+                let idx3 = _mm512_add_epi32(_mm512_add_epi32(idx, idx), idx);
+                // SAFETY: facing lanes' indices are below `res^2`, so every gathered float lies
+                // within the `3 res^2` of `texels`; other lanes are masked off and not read.
+                let (gx, gy, gz) = unsafe {
+                    (
+                        _mm512_mask_i32gather_ps::<4>(zero, faces, idx3, texels.cast()),
+                        _mm512_mask_i32gather_ps::<4>(zero, faces, idx3, texels.add(1).cast()),
+                        _mm512_mask_i32gather_ps::<4>(zero, faces, idx3, texels.add(2).cast()),
+                    )
+                };
+                let sdot = dot(wx, wy, wz, gx, gy, gz);
+                _mm512_cmp_ps_mask::<_CMP_GT_OQ>(sdot, zero)
+                    & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_mul_ps(sdot, _mm512_sub_ps(r, margin)), one)
+            };
+            let g = _mm512_maskz_mov_ps(faces & !hidden, g);
+            for (acc, int) in [(&mut *sr, ir), (&mut *sg, ig), (&mut *sb, ib)] {
+                // SAFETY: as the loads above.
+                unsafe {
+                    let a = acc.as_mut_ptr().add(i);
+                    _mm512_storeu_ps(a, _mm512_add_ps(_mm512_loadu_ps(a), _mm512_mul_ps(int, g)));
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -516,21 +712,27 @@ mod tests {
                 let ns = (n + Vec3::new(0.1, 0.0, -0.1)).normalize();
                 pts.push_raw(p, ns, n);
             }
-            let (mut a, mut b) = (Sums::default(), Sums::default());
-            a.reset(pts.len());
+            let bits = |s: &Sums| s.0.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+            let mut b = Sums::default();
             b.reset(pts.len());
             for _ in 0..3 {
-                add_vpl(&c, &map, &pts, &mut a);
                 add_vpl_with(pair, &c, &map, &pts, &mut b);
             }
-            let bits = |s: &Sums| s.0.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&a), bits(&b), "{format:?}");
-            let nonzero = (0..pts.len()).filter(|&i| a.get(i) != Vec3::ZERO).count();
+            for k in Kernel::available() {
+                let mut a = Sums::default();
+                a.reset(pts.len());
+                for _ in 0..3 {
+                    add_vpl_on(k, &c, &map, &pts, &mut a);
+                }
+                assert_eq!(bits(&a), bits(&b), "{format:?}, {k:?}");
+            }
+            let nonzero = (0..pts.len()).filter(|&i| b.get(i) != Vec3::ZERO).count();
             assert!(nonzero > 100 && nonzero < 900, "{format:?}: {nonzero}: the points must mix lit and not");
         }
-        #[cfg(target_arch = "x86_64")]
-        if !simd() {
-            eprintln!("no AVX2 and F16C on this CPU: the vector kernels were not tested");
+        for k in [Kernel::Avx2, Kernel::Avx512] {
+            if !Kernel::available().contains(&k) {
+                eprintln!("{k:?} is not available on this CPU: its kernel was not tested");
+            }
         }
     }
 }

@@ -358,3 +358,41 @@ fn border_methods_are_knobs() {
     assert!(lap > 0 && depth > 0);
     assert!(both >= lap.max(depth), "laplacian {lap}, depth {depth}, both {both}");
 }
+
+/// A camera moved between two frames: no light-map face already drawn is drawn again, the
+/// faces the new view needs are drawn (the map is extended), and the image equals a fresh
+/// renderer's image of the new view, byte for byte. Cube and paraboloid maps.
+#[test]
+fn a_moved_camera_draws_only_the_faces_it_newly_needs() {
+    // A light above a floor with a box: looking straight down at a patch of floor on one side
+    // of the light needs one face of its map (cube: the lower one; dual paraboloid: the +z
+    // one); a wide view of the floor and the box needs others as well.
+    let mut s = box_on_floor(8);
+    s.lights = vec![light(vec3(0.2, 1.6, 0.1), 4.0)];
+    let down = Camera::look_at(vec3(0.2, 4.0, 1.6), vec3(0.2, 0.0, 1.61), Vec3::Y, 8.0);
+    let around = Camera::look_at(vec3(3.5, 0.4, -3.0), vec3(-1.0, 1.2, 1.0), Vec3::Y, 70.0);
+    for kind in [MapKind::Cube, MapKind::Paraboloid] {
+        let opts = with(Shadows::Smerts, kind);
+        s.camera = Some(down);
+        let mut r = Renderer::new(&s, opts);
+        r.render(&|| {});
+        let before = r.light_map(0).unwrap().faces_drawn().to_vec();
+        r.set_camera(&around);
+        let moved = r.render(&|| {});
+        let map = r.light_map(0).unwrap();
+        let after = map.faces_drawn().to_vec();
+        let drawn = after.iter().filter(|&&d| d).count() as u32;
+        eprintln!("{kind:?}: faces {before:?} -> {after:?}, rasterized {}", map.faces_rasterized());
+        assert!(before.iter().zip(&after).all(|(b, a)| !b || *a), "{kind:?}: a face was dropped");
+        assert!(after.iter().zip(&before).any(|(a, b)| *a && !*b), "{kind:?}: the test needs a new face");
+        assert_eq!(map.faces_rasterized(), drawn, "{kind:?}: a face was drawn twice");
+        assert!(moved.stats.decisions.iter().any(|d| d.reason.contains("map extended")));
+
+        let mut fresh_scene = s.clone();
+        fresh_scene.camera = Some(around);
+        let fresh = Renderer::new(&fresh_scene, opts).render(&|| {});
+        let bits =
+            |f: &Frame| f.film.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&moved) == bits(&fresh), "{kind:?}: the moved camera's image differs from a fresh one");
+    }
+}

@@ -294,6 +294,8 @@ pub struct LightMap {
     drawn: Vec<bool>,
     faces: Vec<Face>,
     triangles_drawn: u64,
+    /// Faces rasterized over the map's life, merges included ([`LightMap::faces_rasterized`]).
+    faces_rasterized: u32,
 }
 
 impl LightMap {
@@ -379,6 +381,7 @@ impl LightMap {
             drawn,
             faces: Vec::with_capacity(count),
             triangles_drawn: 0,
+            faces_rasterized: 0,
         };
 
         let ropts = RasterOptions {
@@ -415,6 +418,7 @@ impl LightMap {
                 }
             };
             map.triangles_drawn += clip.len() as u64;
+            map.faces_rasterized += 1;
             rasterizer.rasterize_into(&clip, &ids, resolution, resolution, &ropts, &mut target);
             // The target's buffers stay with it for the next face.
             let face = map.finish_face(&target.id, &target.depth, groups);
@@ -706,6 +710,38 @@ impl LightMap {
     /// Triangles rasterized, after culling per face and tessellation (summed over faces).
     pub fn triangles_drawn(&self) -> u64 {
         self.triangles_drawn
+    }
+
+    /// Faces rasterized to make this map, [`LightMap::merge`]s included: equal to the number of
+    /// faces drawn when no face was ever drawn twice.
+    pub fn faces_rasterized(&self) -> u32 {
+        self.faces_rasterized
+    }
+
+    /// Takes the faces `other` drew and `self` did not, so that a map can gain faces (a camera
+    /// that moved and sees more of the light's surroundings) without drawing its faces again.
+    /// A face is the same whichever other faces a build draws (the near distance depends on
+    /// the triangles and the light alone), so the result equals one build of all the faces.
+    ///
+    /// # Panics
+    /// If `other` is not a map of the same light, layout and resolution.
+    pub fn merge(&mut self, other: LightMap) {
+        assert!(
+            self.layout == other.layout && self.resolution == other.resolution && self.light == other.light,
+            "merging maps of different lights or parameterisations"
+        );
+        if !self.drawn.iter().any(|&d| d) {
+            self.near = other.near;
+        }
+        let used = other.drawn.iter().filter(|&&d| d).count() as u32;
+        for (f, face) in other.faces.into_iter().enumerate() {
+            if other.drawn[f] && !self.drawn[f] {
+                self.faces[f] = face;
+                self.drawn[f] = true;
+            }
+        }
+        self.triangles_drawn += other.triangles_drawn;
+        self.faces_rasterized += used;
     }
 
     /// Bytes of texel memory.

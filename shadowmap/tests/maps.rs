@@ -922,3 +922,34 @@ fn vpl_map_of_nothing_hides_nothing() {
         }
     }
 }
+
+/// A map that gains faces by `merge` equals one build of all of them, texel for texel, and
+/// counts each face rasterized once.
+#[test]
+fn merged_faces_equal_one_build() {
+    let light = Vec3::new(0.1, 0.2, -0.3);
+    let tris = layered_scene(9, 20, light.as_dvec3());
+    for kind in [MapKind::Cube, MapKind::Paraboloid] {
+        let n = LightMap::face_count(kind);
+        let o = opts(kind, 64, 8.0);
+        let all = LightMap::build(&tris, light, &o, &vec![true; n]);
+        let first: Vec<bool> = (0..n).map(|f| f % 2 == 0).collect();
+        let rest: Vec<bool> = first.iter().map(|f| !f).collect();
+        let mut merged = LightMap::build(&tris, light, &o, &first);
+        merged.merge(LightMap::build(&tris, light, &o, &rest));
+        assert_eq!(merged.faces_drawn(), all.faces_drawn());
+        assert_eq!((merged.faces_rasterized(), merged.near()), (n as u32, all.near()));
+        for f in 0..n as u8 {
+            for y in 0..64 {
+                for x in 0..64 {
+                    assert_eq!(merged.id(f, x, y), all.id(f, x, y), "{kind:?} face {f} ({x}, {y})");
+                    assert_eq!(merged.depth(f, x, y).to_bits(), all.depth(f, x, y).to_bits());
+                }
+            }
+        }
+        // An empty map (a light no hit was in front of) takes a build's faces whole.
+        let mut empty = LightMap::build(&tris, light, &o, &[]);
+        empty.merge(LightMap::build(&tris, light, &o, &vec![true; n]));
+        assert_eq!((empty.near(), empty.faces_rasterized()), (all.near(), n as u32));
+    }
+}

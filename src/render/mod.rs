@@ -373,6 +373,16 @@ impl<'a> Renderer<'a> {
         Pass::ALL.iter().filter(|p| p.reports_rows() && self.plan.runs(**p)).count() as u32
     }
 
+    /// Moves the camera (same image size). What depends on the scene alone is kept: the BVH,
+    /// the light maps, the VPLs and their maps. The next frame finds which light-map faces the
+    /// new view's hits fall on and draws only those not drawn yet
+    /// ([`LightMap::merge`](hyrt_shadowmap::LightMap::merge)); its decisions say so.
+    pub fn set_camera(&mut self, camera: &crate::scene::Camera) {
+        self.camera = CameraRays::new(camera, self.scene.settings.width, self.scene.settings.height);
+        self.raster_near = visibility::near_plane(self.scene, &self.camera);
+        self.forget_needed_faces();
+    }
+
     /// The camera ray through the centre of pixel `(x, y)`.
     #[inline]
     /// Whether triangle `tri`'s material reflects diffusely (indirect light reaches it).

@@ -357,15 +357,19 @@ impl Renderer<'_> {
             decisions.push(FrameDecision::new(
                 what,
                 true,
-                if missing {
+                if missing && have.as_ref().is_some_and(|h| h.iter().any(|&d| d)) {
+                    let new = want.iter().zip(have.as_deref().unwrap_or(&[])).filter(|(w, h)| **w && !**h).count();
+                    format!("map extended: {new} new face(s) drawn for this view, the others reused ({wanted} of {nf} faces in use)")
+                } else if missing {
                     format!("map built: {wanted} of {nf} faces (those camera hits fall on)")
                 } else {
                     format!("map reused from an earlier frame, not rebuilt ({wanted} of {nf} faces)")
                 },
             ));
             if missing {
+                // Only the faces not drawn yet (a moved camera's new ones), merged into the map.
                 let faces: Vec<bool> = match &have {
-                    Some(h) => want.iter().zip(h).map(|(w, h)| *w | *h).collect(),
+                    Some(h) => want.iter().zip(h).map(|(w, h)| *w && !*h).collect(),
                     None => want.to_vec(),
                 };
                 let map = LightMap::build_grouped(
@@ -375,7 +379,10 @@ impl Renderer<'_> {
                     &faces,
                     self.plane_groups().0,
                 );
-                cache[l] = Some(Arc::new(map));
+                match &mut cache[l] {
+                    Some(old) => Arc::make_mut(old).merge(map),
+                    slot => *slot = Some(Arc::new(map)),
+                }
                 built += 1;
             }
         }
@@ -626,6 +633,11 @@ impl Renderer<'_> {
         if kind_changed {
             self.maps.needed = std::sync::OnceLock::new();
         }
+    }
+
+    /// Forgets which light-map faces camera hits fall on (the camera moved), keeping the maps.
+    pub(crate) fn forget_needed_faces(&mut self) {
+        self.maps.needed = std::sync::OnceLock::new();
     }
 
     /// Light `l`'s cached map (for inspection), once a frame has built it; faces no camera hit

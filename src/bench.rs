@@ -52,6 +52,11 @@ pub struct BenchArgs {
     /// Rayon worker threads (default: all cores).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
+    /// Instead of the tables: N frames along an arc about each scene's target, reference and
+    /// hybrid alternated, with the frame-time median and percentiles and the light-map faces
+    /// each frame drew (`orbit.md`, `orbit.csv`; see `hyrt::orbit`).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
+    pub orbit: Option<u32>,
 }
 
 /// The configurations of every table: id and render flags (module docs).
@@ -146,6 +151,9 @@ fn bench(a: &BenchArgs) -> Result<()> {
     let mut loaded = Vec::new();
     for s in &scenes {
         loaded.push(crate::cli::load_scene(s, a.size, None, None)?);
+    }
+    if let Some(n) = a.orbit {
+        return crate::orbit::run(a, &loaded, n);
     }
     let flags = configs(a.vpls);
     let mut per_scene = Vec::new();

@@ -535,3 +535,27 @@ fn a_terminated_render_leaves_no_temporaries() {
         assert_eq!(read(&png), b"precious", "a terminated run replaced the old output");
     }
 }
+
+/// `hyrt bench --orbit N` renders N frames per configuration along the arc and writes a row
+/// per configuration (the frames after the first) and a CSV row per frame, and not the
+/// thesis tables.
+#[test]
+fn bench_orbit_writes_frame_times_along_the_path() {
+    let dir = common::out_dir("bench-orbit");
+    let out = dir.to_str().unwrap();
+    let (ok, stdout, err) =
+        common::hyrt(&["bench", "cornell", "--size", "40x30", "--orbit", "4", "--out", out]);
+    assert!(ok, "{err}");
+    let md = std::fs::read_to_string(dir.join("orbit.md")).unwrap();
+    assert_eq!(md.trim(), stdout.trim());
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| cornell")).collect();
+    assert_eq!(rows.len(), 2, "{md}");
+    assert!(rows[0].contains("`rt`") && rows[1].contains("`smerts-cube`"));
+    // Frames after the first: 3 each.
+    assert!(rows.iter().all(|r| r.split(" | ").nth(2) == Some("3")), "{md}");
+    let csv = std::fs::read_to_string(dir.join("orbit.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * 4, "{csv}");
+    // The reference draws no maps at all.
+    assert!(csv.lines().filter(|l| l.contains(",rt,")).all(|l| l.ends_with(",0")), "{csv}");
+    assert!(!std::path::Path::new(out).join("tables.md").exists());
+}

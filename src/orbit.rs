@@ -1,0 +1,155 @@
+//! `hyrt bench --orbit N`: frames along a camera path, for the reference and the hybrid.
+//!
+//! The camera swings about the scene's target (`eye + forward`, the `target` of a scene file)
+//! around its `up` axis, from -[`ARC_DEG`] to +[`ARC_DEG`] degrees in `N` steps: an arc rather
+//! than a full turn, since the thesis scenes are rooms that a full turn would leave. The two
+//! configurations' frames are alternated at each camera position. The first frame builds the
+//! BVH's companions (light maps, VPLs); every later one reuses them and draws only the
+//! light-map faces its view newly needs ([`Renderer::set_camera`]), counted per frame.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use glam::{Quat, Vec3};
+
+use crate::{
+    bench::BenchArgs,
+    cli::Knobs,
+    output::atomic_write,
+    render::Renderer,
+    scene::{Camera, Scene},
+};
+
+/// Half the arc the camera swings through, in degrees.
+pub const ARC_DEG: f32 = 20.0;
+
+/// The configurations of the orbit: id and render flags.
+const CONFIGS: [(&str, &str); 2] = [("rt", "--preset reference"), ("smerts-cube", "--preset hybrid")];
+
+/// Camera `i` of `n` on the arc about `cam`'s target.
+pub fn orbit_camera(cam: &Camera, i: u32, n: u32) -> Camera {
+    let t = if n <= 1 { 0.5 } else { i as f32 / (n - 1) as f32 };
+    let angle = (2.0 * t - 1.0) * ARC_DEG.to_radians();
+    let target = cam.eye + cam.forward;
+    let turn = Quat::from_axis_angle(cam.up.normalize_or(Vec3::Y), angle);
+    let forward = turn * cam.forward;
+    Camera { eye: target - forward, forward, ..*cam }
+}
+
+/// One configuration's frames along the path.
+struct Track {
+    label: &'static str,
+    first_ms: f64,
+    /// Frames after the first, in path order.
+    ms: Vec<f64>,
+    /// Light-map faces drawn in each frame after the first.
+    faces: Vec<u32>,
+}
+
+/// The `p`-th percentile (nearest rank) of `v`.
+fn percentile(v: &[f64], p: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    if s.is_empty() {
+        return 0.0;
+    }
+    let k = ((p / 100.0) * s.len() as f64).ceil().max(1.0) as usize - 1;
+    s[k.min(s.len() - 1)]
+}
+
+/// Faces rasterized so far over every light's map.
+fn faces_so_far(r: &Renderer, scene: &Scene) -> u32 {
+    (0..scene.lights.len()).filter_map(|l| r.light_map(l)).map(|m| m.faces_rasterized()).sum()
+}
+
+/// Runs the orbit of `n` frames on every scene of `a` and writes `orbit.md` and `orbit.csv`.
+pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
+    let mut md = format!(
+        "Produced by `hyrt bench --orbit {n}` ({} threads): the camera swings +-{ARC_DEG} degrees about the scene's target in {n} frames; the two configurations' frames alternate at each position. Times are of the frames after the first (which builds the maps); percentiles by nearest rank; fps = frames / total time. Faces: light-map faces drawn after the first frame (0 when the first view's maps serve the whole path).\n\n",
+        rayon::current_num_threads()
+    );
+    md.push_str("| scene | config | frames | median ms | p5 ms | p95 ms | fps | first frame ms | faces drawn after the first |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    let mut csv = String::from("scene,config,frame,ms,faces_drawn\n");
+    for sc in scenes {
+        let cam = sc.camera.context("the scene has no camera")?;
+        let mut renderers = Vec::new();
+        for (label, flags) in CONFIGS {
+            let words: Vec<&str> = flags.split_whitespace().collect();
+            let options = Knobs::from_flags(&words)?.options_for(sc)?;
+            renderers.push((label, Renderer::new(sc, options)));
+        }
+        let mut tracks: Vec<Track> = CONFIGS
+            .iter()
+            .map(|(label, _)| Track { label, first_ms: 0.0, ms: vec![], faces: vec![] })
+            .collect();
+        for i in 0..n {
+            let c = orbit_camera(&cam, i, n);
+            for ((_, r), t) in renderers.iter_mut().zip(&mut tracks) {
+                r.set_camera(&c);
+                let before = faces_so_far(r, sc);
+                let start = Instant::now();
+                r.render(&|| {});
+                let ms = start.elapsed().as_secs_f64() * 1e3;
+                let faces = faces_so_far(r, sc) - before;
+                let _ = writeln!(csv, "{},{},{i},{ms:.3},{faces}", sc.name, t.label);
+                if i == 0 {
+                    t.first_ms = ms;
+                } else {
+                    t.ms.push(ms);
+                    t.faces.push(faces);
+                }
+            }
+        }
+        for t in &tracks {
+            let total: f64 = t.ms.iter().sum();
+            let fps = if total > 0.0 { t.ms.len() as f64 * 1e3 / total } else { 0.0 };
+            let _ = writeln!(
+                md,
+                "| {} | `{}` | {} | {:.1} | {:.1} | {:.1} | {:.2} | {:.0} | {} |",
+                sc.name,
+                t.label,
+                t.ms.len(),
+                percentile(&t.ms, 50.0),
+                percentile(&t.ms, 5.0),
+                percentile(&t.ms, 95.0),
+                fps,
+                t.first_ms,
+                t.faces.iter().sum::<u32>()
+            );
+        }
+        eprintln!("{}: orbit done", sc.name);
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create folder", a.out.display()))?;
+    for (name, text) in [("orbit.md", &md), ("orbit.csv", &csv)] {
+        atomic_write(&a.out.join(name), |tmp| std::fs::write(tmp, text).map_err(Into::into))?;
+    }
+    print!("{md}");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_arc_keeps_the_target_and_the_distance() {
+        let cam = Camera::look_at(Vec3::new(3.0, 1.0, 2.0), Vec3::new(0.0, 0.5, -1.0), Vec3::Y, 50.0);
+        let target = cam.eye + cam.forward;
+        for i in 0..5 {
+            let c = orbit_camera(&cam, i, 5);
+            assert!((c.eye + c.forward - target).length() < 1e-5);
+            assert!((c.forward.length() - cam.forward.length()).abs() < 1e-5);
+        }
+        assert!(
+            (orbit_camera(&cam, 2, 5).eye - cam.eye).length() < 1e-5,
+            "the middle frame is the scene's view"
+        );
+        // Horizontal parts: the swing is about `up`, the vertical part stays.
+        let flat = |i| (orbit_camera(&cam, i, 5).forward * Vec3::new(1.0, 0.0, 1.0)).normalize();
+        let a = flat(0).dot(flat(4));
+        assert!((a - (2.0 * ARC_DEG).to_radians().cos()).abs() < 1e-3, "{a}");
+        assert_eq!(percentile(&[3.0, 1.0, 2.0, 4.0], 50.0), 2.0);
+        assert_eq!(percentile(&[3.0, 1.0, 2.0, 4.0], 95.0), 4.0);
+    }
+}

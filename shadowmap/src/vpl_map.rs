@@ -351,10 +351,9 @@ pub fn half_to_f32(bits: u16) -> f32 {
     half::f16::from_bits(bits).to_f32()
 }
 
-/// `(u, v, z)` of texel `(x, y)`'s centre (module docs), in `f32`, in the order the vectorised
-/// lookups repeat.
+/// `(u, v, z)` of texel `(x, y)`'s centre (module docs), in `f32`.
 #[inline]
-pub fn centre_uvz(res: u32, x: u32, y: u32) -> (f32, f32, f32) {
+fn centre_uvz(res: u32, x: u32, y: u32) -> (f32, f32, f32) {
     let inv2 = 2.0 / res as f32;
     let u = (x as f32 + 0.5) * inv2 - 1.0;
     let v = 1.0 - (y as f32 + 0.5) * inv2;

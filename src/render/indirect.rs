@@ -224,7 +224,7 @@ impl Vpls<'_> {
         stride: usize,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let kd = r.scene.materials[r.scene.material[s.tri as usize] as usize].diffuse;
+        let kd = r.kd(s.tri);
         if kd == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -269,7 +269,7 @@ impl Vpls<'_> {
         stride: usize,
     ) -> Vec<Vec3> {
         let stride = stride.max(1);
-        let kd = |s: &SurfaceHit| r.scene.materials[r.scene.material[s.tri as usize] as usize].diffuse;
+        let kd = |s: &SurfaceHit| r.kd(s.tri);
         // The diffuse points of each subset.
         let mut groups: Vec<(Vec<usize>, Points)> = vec![Default::default(); stride];
         for (j, (s, &q)) in hits.iter().zip(subsets).enumerate() {
@@ -345,11 +345,13 @@ pub(crate) fn run(
     // The shading point of pixel `i`, if it is diffuse.
     let diffuse = |i: usize| {
         let h = gbuffer[i].as_ref()?;
-        let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
+        let kd = r.kd(h.tri);
         let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
         (kd != Vec3::ZERO).then(|| SurfaceHit::new(r.scene, h, dir))
     };
 
+    // The direct-light pass's shading points, which only the maps' gather reads.
+    let shared = points.filter(|_| !v.maps.is_empty());
     // Rows per parallel job: with interleaving, each of the k^2 subsets gets a row or more.
     let band = 4usize.max(k);
     let filter = r.options.indirect_opts.filter;
@@ -368,7 +370,7 @@ pub(crate) fn run(
                 (0..k * k).map(|_| (Vec::with_capacity(room), Points::with_capacity(room))).collect();
             for (j, (acc, geo)) in irr.iter_mut().zip(geo.iter_mut()).enumerate() {
                 let i = first + j;
-                if let Some(points) = points.filter(|_| !v.maps.is_empty()) {
+                if let Some(points) = shared {
                     let (sp, Some(h)) = (&points[i], &gbuffer[i]) else { continue };
                     if sp.ns != Vec3::ZERO {
                         *geo = [sp.ns.x, sp.ns.y, sp.ns.z, h.t];
@@ -409,12 +411,7 @@ pub(crate) fn run(
                 for (vi, (consts, map)) in v.consts.iter().zip(v.maps).enumerate() {
                     let (q, sums) = (vi % (k * k), &mut sums[vi % (k * k)]);
                     pairs += groups[q].0.len() as u64;
-                    match filter {
-                        VplFilter::Texel => gather::add_vpl(consts, map, &groups[q].1, sums),
-                        VplFilter::Bilinear => {
-                            gather::add_vpl_with(gather::pair_bilinear, consts, map, &groups[q].1, sums)
-                        }
-                    }
+                    add_vpl(filter, consts, map, &groups[q].1, sums);
                 }
                 for ((group, _), sums) in groups.iter().zip(&sums) {
                     for (m, &j) in group.iter().enumerate() {
@@ -432,7 +429,7 @@ pub(crate) fn run(
     let filtered = if k > 1 { interleave_filter(&irr, &geo, w, k) } else { irr };
     out.par_iter_mut().zip(filtered).enumerate().for_each(|(i, (o, e))| {
         if let Some(h) = &gbuffer[i] {
-            let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
+            let kd = r.kd(h.tri);
             if kd != Vec3::ZERO {
                 *o = kd * FRAC_1_PI * e;
             }
@@ -442,6 +439,14 @@ pub(crate) fn run(
         c += d;
         (c, n + m)
     })
+}
+
+/// Adds the light of VPL `consts` at every point of `pts` to `sums`, looked up as `filter` asks.
+fn add_vpl(filter: VplFilter, consts: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
+    match filter {
+        VplFilter::Texel => gather::add_vpl(consts, map, pts, sums),
+        VplFilter::Bilinear => gather::add_vpl_with(gather::pair_bilinear, consts, map, pts, sums),
+    }
 }
 
 /// [`run`] without interleaving, from the direct-light pass's shading points: a band of
@@ -469,17 +474,12 @@ fn gather_all(
             let mut sums = Sums::default();
             sums.reset(pts.len());
             for (consts, map) in v.consts.iter().zip(v.maps) {
-                match filter {
-                    VplFilter::Texel => gather::add_vpl(consts, map, &pts, &mut sums),
-                    VplFilter::Bilinear => {
-                        gather::add_vpl_with(gather::pair_bilinear, consts, map, &pts, &mut sums)
-                    }
-                }
+                add_vpl(filter, consts, map, &pts, &mut sums);
             }
             let mut diffuse = 0u64;
             for (j, (o, (p, h))) in out.iter_mut().zip(points.iter().zip(hits)).enumerate() {
                 if let (Some(h), true) = (h, p.ns != Vec3::ZERO) {
-                    let kd = r.scene.materials[r.scene.material[h.tri as usize] as usize].diffuse;
+                    let kd = r.kd(h.tri);
                     *o = kd * FRAC_1_PI * sums.get(j);
                     diffuse += 1;
                 }

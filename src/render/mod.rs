@@ -385,9 +385,14 @@ impl<'a> Renderer<'a> {
 
     /// The camera ray through the centre of pixel `(x, y)`.
     #[inline]
+    /// The diffuse reflectance `Kd` of triangle `tri`'s material.
+    pub(crate) fn kd(&self, tri: u32) -> Vec3 {
+        self.scene.materials[self.scene.material[tri as usize] as usize].diffuse
+    }
+
     /// Whether triangle `tri`'s material reflects diffusely (indirect light reaches it).
     pub(crate) fn diffuse(&self, tri: u32) -> bool {
-        self.scene.materials[self.scene.material[tri as usize] as usize].diffuse != Vec3::ZERO
+        self.kd(tri) != Vec3::ZERO
     }
 
     pub fn camera_ray(&self, x: u32, y: u32) -> Ray {

@@ -408,6 +408,11 @@ pub struct PlanArgs {
     /// or skipped; maps rebuilt or reused), with its counters.
     #[arg(long)]
     pub frames: bool,
+    /// With `--frames`: render N frames along `hyrt bench --orbit N`'s camera path instead of
+    /// two at the scene's camera, to show which passes each moved view runs again and which
+    /// maps it reuses or extends.
+    #[arg(long, value_name = "N", requires = "frames", value_parser = clap::value_parser!(u32).range(1..))]
+    pub orbit: Option<u32>,
     /// Print the plan as JSON.
     #[arg(long)]
     pub json: bool,
@@ -585,7 +590,12 @@ fn compare(a: &CompareArgs) -> Result<()> {
     Ok(())
 }
 
-/// `hyrt plan`: the static plan, and with `--frames` what two frames actually did.
+fn vec3_text(v: glam::Vec3) -> String {
+    format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z)
+}
+
+/// `hyrt plan`: the static plan, and with `--frames` what two frames (or the frames of an
+/// orbit) actually did.
 fn plan(a: &PlanArgs) -> Result<()> {
     let scene = load_scene(&a.scene, a.size, a.max_depth, None)?;
     let options = a.knobs.options_for(&scene)?;
@@ -599,17 +609,37 @@ fn plan(a: &PlanArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let renderer = Renderer::new(&scene, options);
-    let frames: Vec<_> = (0..2).map(|_| renderer.render(&|| {}).stats).collect();
+    let mut renderer = Renderer::new(&scene, options);
+    let cam = scene.camera.context("the scene has no camera")?;
+    // The camera of each frame: the scene's twice, or the orbit's path.
+    let cameras: Vec<_> = match a.orbit {
+        None => vec![cam; 2],
+        Some(n) => (0..n).map(|i| crate::orbit::orbit_camera(&cam, i, n)).collect(),
+    };
+    let frames: Vec<_> = cameras
+        .iter()
+        .map(|c| {
+            renderer.set_camera(c);
+            renderer.render(&|| {}).stats
+        })
+        .collect();
+    let passes = |s: &crate::render::FrameStats| {
+        let mut p: Vec<&str> = s.time_ms.keys().copied().filter(|k| *k != "total").collect();
+        p.sort_by_key(|n| crate::render::Pass::rank(n));
+        p
+    };
     if a.json {
         let f: Vec<_> = frames
             .iter()
-            .map(|s| {
+            .zip(&cameras)
+            .map(|(s, c)| {
                 serde_json::json!({
+                    "eye": c.eye.to_array(),
+                    "forward": c.forward.to_array(),
                     "decisions": s.decisions,
                     "maps_built": s.maps_built,
                     "rays": crate::measure::RayCountsJson::from(s.rays),
-                    "passes": s.time_ms.keys().filter(|k| **k != "total").collect::<Vec<_>>(),
+                    "passes": passes(s),
                 })
             })
             .collect();
@@ -619,9 +649,10 @@ fn plan(a: &PlanArgs) -> Result<()> {
     }
     println!("{}: {} triangles, {} lights", scene.name, scene.triangle_count(), scene.lights.len());
     print!("{}", renderer.plan);
-    for (i, s) in frames.iter().enumerate() {
+    for (i, (s, c)) in frames.iter().zip(&cameras).enumerate() {
         let r = &s.rays;
-        println!("frame {}:", i + 1);
+        println!("frame {} (eye {}):", i + 1, vec3_text(c.eye));
+        println!("  passes run: {}", passes(s).join(", "));
         print!("{}", crate::plan::format_decisions(&s.decisions));
         println!(
             "  rays: primary {} shadow {} specular {} vpl_shadow {} vpl_path {}; light maps built {}",

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::{
     render::{Indirect, Options, Pass, Shadows, Visibility},
-    scene::Scene,
+    scene::{PointLight, Scene},
 };
 
 /// A pass of the frame, run or skipped, with the reason.
@@ -52,6 +52,12 @@ pub struct Plan {
 impl Plan {
     /// Decides the passes for `scene` rendered with `opts`.
     pub fn new(scene: &Scene, opts: &Options) -> Self {
+        Self::with_lights(scene, &scene.lights, opts)
+    }
+
+    /// The same for `scene` lit by `lights` instead of its own (moved lights, as
+    /// [`crate::render::Renderer::set_light`] makes them).
+    pub fn with_lights(scene: &Scene, lights: &[PointLight], opts: &Options) -> Self {
         let mut plan = Plan::default();
         let tris = scene.triangle_count();
         plan.add(true, Pass::BvhBuild, format!("ray casting needs a BVH over {tris} triangles"));
@@ -65,14 +71,14 @@ impl Plan {
         };
         plan.add(true, Pass::Visibility, vis);
 
-        let lights = scene.lights.len();
+        let count = lights.len();
         let used = scene.materials_in_use();
         let highlights = used.iter().filter(|m| m.has_highlight()).count();
         let highlights = match highlights {
             0 => "diffuse only".to_string(),
             n => format!("diffuse, highlights on {n} of {} materials", used.len()),
         };
-        for (l, light) in scene.lights.iter().enumerate() {
+        for (l, light) in lights.iter().enumerate() {
             if light.intensity.max_element() <= 0.0 {
                 plan.add(
                     false,
@@ -81,7 +87,7 @@ impl Plan {
                 );
             }
         }
-        if lights == 0 {
+        if count == 0 {
             plan.add(false, Pass::Direct, "the scene has no point lights".into());
         } else {
             let sh = &opts.shadow;
@@ -99,7 +105,9 @@ impl Plan {
                     plan.add(
                         true,
                         Pass::Direct,
-                        format!("{lights} point light(s), {highlights}, rays: one shadow ray per lit hit and light"),
+                        format!(
+                            "{count} point light(s), {highlights}, rays: one shadow ray per lit hit and light"
+                        ),
                     );
                 }
                 Shadows::Maps | Shadows::Smerts => {
@@ -154,7 +162,7 @@ impl Plan {
         let io = &opts.indirect_opts;
         match opts.indirect {
             Indirect::None => plan.add(false, Pass::Indirect, "no indirect-light settings (VPLs) requested".into()),
-            _ if lights == 0 => plan.add(false, Pass::Indirect, "no point lights to place VPLs from".into()),
+            _ if count == 0 => plan.add(false, Pass::Indirect, "no point lights to place VPLs from".into()),
             _ if io.vpl.paths == 0 || io.vpl.bounces == 0 => {
                 plan.add(false, Pass::Indirect, "0 VPL paths or bounces requested".into())
             }

@@ -423,6 +423,36 @@ fn plan_command_prints_plan_and_frame_decisions() {
     assert!(!ok && err.contains("no-such-scene.toml"), "{err}");
 }
 
+/// `hyrt plan --frames --orbit N`: N frames along the orbit, each at its own camera; after
+/// the first, no light map is built whole, and the VPLs are reused.
+#[test]
+fn plan_along_the_orbit_shows_what_each_frame_reruns() {
+    let args = ["plan", "cornell", "--preset", "hybrid", "--size", "48x36", "--vpls", "4", "--frames"];
+    let (ok, out, err) = common::hyrt(&[&args[..], &["--orbit", "4", "--json"]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let frames = v["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 4);
+    let eyes: Vec<_> = frames.iter().map(|f| f["eye"].to_string()).collect();
+    assert!(eyes.windows(2).all(|w| w[0] != w[1]), "the camera moves: {eyes:?}");
+    assert_eq!(frames[0]["maps_built"], 2);
+    for f in &frames[1..] {
+        let d = f["decisions"].as_array().unwrap();
+        let reason = |what: &str| d.iter().find(|d| d["what"] == what).map(|d| d["reason"].to_string());
+        assert!(reason("vpls").is_some_and(|r| r.contains("reused")), "{d:?}");
+        for l in ["light 0", "light 1"] {
+            let r = reason(l).unwrap();
+            assert!(r.contains("reused") || r.contains("extended"), "{l}: {r}");
+        }
+        assert!(f["passes"].as_array().unwrap().iter().any(|p| p == "visibility"));
+    }
+    let (ok, out, err) = common::hyrt(&[&args[..], &["--orbit", "2"]].concat());
+    assert!(ok, "{err}");
+    assert!(out.contains("frame 2 (eye (") && out.contains("passes run: visibility"), "{out}");
+    let (ok, _, err) = common::hyrt(&["plan", "cornell", "--orbit", "3"]);
+    assert!(!ok && err.contains("--frames"), "--orbit needs --frames: {err}");
+}
+
 /// `hyrt bench` on the built-in scene: every table, one CSV row per configuration with its
 /// flags, and the reference compared with itself is exact.
 #[test]

@@ -396,3 +396,43 @@ fn a_moved_camera_draws_only_the_faces_it_newly_needs() {
         assert!(bits(&moved) == bits(&fresh), "{kind:?}: the moved camera's image differs from a fresh one");
     }
 }
+
+/// A light moved between two frames: its map alone is built again (the other light's map is
+/// the same object, reused), the VPLs and their maps are traced again from the moved lights,
+/// and the image equals a fresh renderer's image of the scene with the light there, byte for
+/// byte.
+#[test]
+fn a_moved_light_rebuilds_exactly_its_own_map() {
+    let mut s = box_on_floor(8);
+    s.lights = vec![light(vec3(2.0, 4.0, 1.0), 20.0), light(vec3(-1.5, 2.5, -1.0), 6.0)];
+    let mut opts = with(Shadows::Smerts, MapKind::Cube);
+    opts.check_visibility = false;
+    opts.indirect = hyrt::render::Indirect::Maps;
+    opts.indirect_opts.vpl.paths = 8;
+    opts.indirect_opts.map.resolution = 64;
+    let moved_light = light(vec3(-0.5, 1.8, 1.2), 6.0);
+
+    let mut r = Renderer::new(&s, opts);
+    r.render(&|| {});
+    let kept = r.light_map(0).unwrap();
+    assert_eq!(r.set_light(1, s.lights[1]), Vec::<&str>::new(), "an unchanged light drops nothing");
+    assert_eq!(r.set_light(1, moved_light), vec!["the light's map", "VPLs and their maps"]);
+    let f = r.render(&|| {});
+    assert_eq!(f.stats.maps_built, 1, "one map built");
+    assert!(std::sync::Arc::ptr_eq(&kept, &r.light_map(0).unwrap()), "light 0's map was rebuilt");
+    let says =
+        |what: &str, text: &str| f.stats.decisions.iter().any(|d| d.what == what && d.reason.contains(text));
+    assert!(says("light 0", "map reused"), "{:#?}", f.stats.decisions);
+    assert!(says("light 1", "map rebuilt: the light moved"), "{:#?}", f.stats.decisions);
+    assert!(says("vpls", "generated from 8 light path(s) (a light moved)"), "{:#?}", f.stats.decisions);
+    assert!(says("vpl_maps", "built (a light moved)"), "{:#?}", f.stats.decisions);
+    assert_eq!(r.lights()[1], moved_light);
+
+    let mut fresh_scene = s.clone();
+    fresh_scene.lights[1] = moved_light;
+    let fresh = Renderer::new(&fresh_scene, opts).render(&|| {});
+    let bits =
+        |f: &Frame| f.film.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert!(bits(&f) == bits(&fresh), "the moved light's image differs from a fresh one");
+    assert_ne!(bits(&f), bits(&Renderer::new(&s, opts).render(&|| {})), "the light did not move");
+}

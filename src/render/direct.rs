@@ -38,7 +38,7 @@ pub(crate) fn run(
             }
             let tri = &r.scene.positions[s.tri as usize];
             let before = c;
-            let sides = sides.of(s.tri, tri, &r.scene.lights);
+            let sides = sides.of(s.tri, tri, &r.lights);
             *px = reflect(r, &s, |l, light| {
                 let g = light_geometry(&s, light)?;
                 (viewer_side(&s, tri, sides[l]) && shadow_ray(&s, &light.position, r, &mut c)).then_some(g)
@@ -100,7 +100,7 @@ pub(crate) fn reflect(
     let highlight = m.has_highlight();
     // Irradiance at normal incidence times cos(theta), summed; and weighted by the lobe.
     let (mut sum, mut lobe_sum) = (Vec3::ZERO, Vec3::ZERO);
-    for (l, light) in r.scene.lights.iter().enumerate() {
+    for (l, light) in r.lights.iter().enumerate() {
         let Some((wi, cos, d2)) = lit(l, light) else { continue };
         let e = light.intensity * (cos / d2);
         sum += e;

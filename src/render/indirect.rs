@@ -88,6 +88,8 @@ impl Default for IndirectOptions {
 pub(crate) struct VplCache {
     vpls: OnceLock<(Vec<vpl::Vpl>, RayCounts)>,
     maps: OnceLock<Vec<VplMap>>,
+    /// Why the cache was emptied, for the decision of the frame that fills it again.
+    cause: Option<&'static str>,
 }
 
 impl Renderer<'_> {
@@ -100,6 +102,11 @@ impl Renderer<'_> {
 }
 
 impl VplCache {
+    /// An empty cache, emptied for `cause` (said by the next frame's decisions).
+    pub(crate) fn dropped_because(cause: &'static str) -> Self {
+        Self { cause: Some(cause), ..Self::default() }
+    }
+
     /// Drops the VPL maps (made with other map options), keeping the VPLs.
     pub(crate) fn drop_maps(&mut self) {
         self.maps = OnceLock::new();
@@ -126,16 +133,22 @@ impl Renderer<'_> {
         let mut fresh = false;
         let (vpls, _) = self.vpl_cache.vpls.get_or_init(|| {
             fresh = true;
-            vpl::generate(self.scene, &self.tracer, &opts.vpl)
+            vpl::generate(self.scene, &self.lights, &self.tracer, &opts.vpl)
         });
         if fresh {
             stats.rays += self.vpl_cache.vpls.get().expect("just made").1;
         }
+        let cause = self.vpl_cache.cause.map_or(String::new(), |c| format!(" ({c})"));
         stats.decisions.push(FrameDecision::new(
             "vpls",
             fresh,
             if fresh {
-                format!("{} VPLs generated from {} light path(s)", vpls.len(), opts.vpl.paths)
+                format!(
+                    "{} VPLs generated from {} light path(s){cause} in {:.1} ms",
+                    vpls.len(),
+                    opts.vpl.paths,
+                    super::ms(t)
+                )
             } else {
                 format!("{} VPLs reused from an earlier frame", vpls.len())
             },
@@ -172,7 +185,11 @@ impl Renderer<'_> {
                 "vpl_maps",
                 fresh,
                 if fresh {
-                    format!("{} paraboloid maps of {n}x{n} built", maps.len())
+                    format!(
+                        "{} paraboloid maps of {n}x{n} built{cause} in {:.1} ms",
+                        maps.len(),
+                        super::ms(t)
+                    )
                 } else {
                     format!("{} maps reused from an earlier frame", maps.len())
                 },

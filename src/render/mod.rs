@@ -241,6 +241,8 @@ pub struct Renderer<'a> {
     /// Private so that changes go through [`Renderer::set_options`], which drops stale caches.
     pub(crate) options: Options,
     pub camera: CameraRays,
+    /// The point lights: the scene's, until [`Renderer::set_light`] moves one.
+    pub(crate) lights: Vec<crate::scene::PointLight>,
     /// Rasterization near-plane distance (see `visibility::near_plane`), fixed per scene.
     pub raster_near: f32,
     /// Bounding boxes of runs of triangles, for frustum culling before rasterization.
@@ -275,7 +277,7 @@ pub type Progress<'p> = &'p (dyn Fn() + Sync);
 impl<'a> Renderer<'a> {
     /// Builds the BVH and the plan. The scene must have passed `Scene::validate`.
     pub fn new(scene: &'a Scene, options: Options) -> Self {
-        let plan = Plan::new(scene, &options);
+        let plan = Plan::with_lights(scene, &scene.lights, &options);
         let tracer = Tracer::build(&scene.positions);
         let cam = scene.camera.expect("validated scene has a camera");
         let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
@@ -292,6 +294,7 @@ impl<'a> Renderer<'a> {
             plan,
             options,
             camera,
+            lights: scene.lights.clone(),
             raster_near,
             clusters,
             raster,
@@ -343,7 +346,7 @@ impl<'a> Renderer<'a> {
         }
         let (a, b) = (&old.indirect_opts, &options.indirect_opts);
         if a.vpl != b.vpl {
-            self.vpl_cache = Default::default();
+            self.vpl_cache = indirect::VplCache::dropped_because("the VPL knobs changed");
             dropped.push("VPLs and their maps");
         } else if a.map != b.map {
             self.vpl_cache.drop_maps();
@@ -353,7 +356,7 @@ impl<'a> Renderer<'a> {
             let n = self.scene.settings.width as usize * self.scene.settings.height as usize;
             self.pixel_rays = pixel_rays::PixelRays::new(n, options.keep_buffers);
         }
-        self.plan = Plan::new(self.scene, &options);
+        self.plan = Plan::with_lights(self.scene, &self.lights, &options);
         self.options = options;
         dropped
     }
@@ -383,8 +386,35 @@ impl<'a> Renderer<'a> {
         self.forget_needed_faces();
     }
 
-    /// The camera ray through the centre of pixel `(x, y)`.
-    #[inline]
+    /// The point lights the frames use: the scene's, as moved by [`Renderer::set_light`].
+    pub fn lights(&self) -> &[crate::scene::PointLight] {
+        &self.lights
+    }
+
+    /// Moves (or changes the intensity of) light `l`. What depends on that light alone is
+    /// dropped: its map, which the next frame builds again (the other lights' maps are kept and
+    /// reused), and the VPLs with their maps, which are traced from all the lights. The next
+    /// frame's decisions say what was rebuilt and how long it took. Returns what was dropped;
+    /// nothing when the light is unchanged, or `l` is not a light.
+    pub fn set_light(&mut self, l: usize, light: crate::scene::PointLight) -> Vec<&'static str> {
+        let Some(old) = self.lights.get(l).copied() else { return Vec::new() };
+        if old == light {
+            return Vec::new();
+        }
+        self.lights[l] = light;
+        let mut dropped = Vec::new();
+        if old.position != light.position
+            || (old.intensity.max_element() > 0.0) != (light.intensity.max_element() > 0.0)
+        {
+            self.drop_light_map(l);
+            dropped.push("the light's map");
+        }
+        self.vpl_cache = indirect::VplCache::dropped_because("a light moved");
+        dropped.push("VPLs and their maps");
+        self.plan = Plan::with_lights(self.scene, &self.lights, &self.options);
+        dropped
+    }
+
     /// The diffuse reflectance `Kd` of triangle `tri`'s material.
     pub(crate) fn kd(&self, tri: u32) -> Vec3 {
         self.scene.materials[self.scene.material[tri as usize] as usize].diffuse
@@ -395,6 +425,8 @@ impl<'a> Renderer<'a> {
         self.kd(tri) != Vec3::ZERO
     }
 
+    /// The camera ray through the centre of pixel `(x, y)`.
+    #[inline]
     pub fn camera_ray(&self, x: u32, y: u32) -> Ray {
         Ray::new(self.camera.eye, self.camera.direction(x, y).normalize(), f32::INFINITY)
     }

@@ -125,6 +125,9 @@ pub(crate) struct MapCache {
     /// Per light and face, whether a camera hit falls on it: a renderer's scene and camera are
     /// fixed, so this is computed on the first frame only.
     needed: std::sync::OnceLock<Vec<bool>>,
+    /// Lights whose map was dropped because they moved ([`Renderer::set_light`]), until the
+    /// next frame builds it again (its decision says why).
+    moved: Mutex<Vec<bool>>,
     /// Buffers of the last frame, reused (allocating them afresh costs page faults).
     scratch: Mutex<ShadowBuffers>,
 }
@@ -287,7 +290,7 @@ impl Renderer<'_> {
     fn needed_faces(&self, gbuffer: &[Option<Hit>]) -> Vec<bool> {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
-        let lights = &self.scene.lights;
+        let lights = &self.lights;
         let w = self.scene.settings.width.max(1) as usize;
         (0..gbuffer.len().div_ceil(w))
             .into_par_iter()
@@ -320,10 +323,12 @@ impl Renderer<'_> {
     fn light_maps(&self, gbuffer: &[Option<Hit>]) -> (Vec<Arc<LightMap>>, u32, Vec<FrameDecision>) {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
-        let lights = &self.scene.lights;
+        let lights = &self.lights;
         let needed = self.maps.needed.get_or_init(|| self.needed_faces(gbuffer));
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
         cache.resize(lights.len(), None);
+        let mut moved = self.maps.moved.lock().unwrap_or_else(|e| e.into_inner());
+        moved.resize(lights.len(), false);
         let mut built = 0;
         let mut decisions = Vec::with_capacity(lights.len());
         for (l, light) in lights.iter().enumerate() {
@@ -343,6 +348,7 @@ impl Renderer<'_> {
                     false,
                     format!("{why}: no map, no classification, no shadow rays for camera hits"),
                 ));
+                moved[l] = false;
                 if have.is_none() {
                     cache[l] = Some(Arc::new(LightMap::build(
                         &self.scene.positions,
@@ -354,18 +360,20 @@ impl Renderer<'_> {
                 continue;
             }
             // The light is in use either way; the reason says whether its map was rebuilt.
-            decisions.push(FrameDecision::new(
-                what,
-                true,
-                if missing && have.as_ref().is_some_and(|h| h.iter().any(|&d| d)) {
-                    let new = want.iter().zip(have.as_deref().unwrap_or(&[])).filter(|(w, h)| **w && !**h).count();
-                    format!("map extended: {new} new face(s) drawn for this view, the others reused ({wanted} of {nf} faces in use)")
-                } else if missing {
-                    format!("map built: {wanted} of {nf} faces (those camera hits fall on)")
-                } else {
-                    format!("map reused from an earlier frame, not rebuilt ({wanted} of {nf} faces)")
-                },
-            ));
+            let reason = if missing && have.as_ref().is_some_and(|h| h.iter().any(|&d| d)) {
+                let new =
+                    want.iter().zip(have.as_deref().unwrap_or(&[])).filter(|(w, h)| **w && !**h).count();
+                format!(
+                    "map extended: {new} new face(s) drawn for this view, the others reused ({wanted} of {nf} faces in use)"
+                )
+            } else if missing && std::mem::take(&mut moved[l]) {
+                format!("map rebuilt: the light moved; {wanted} of {nf} faces (those camera hits fall on)")
+            } else if missing {
+                format!("map built: {wanted} of {nf} faces (those camera hits fall on)")
+            } else {
+                format!("map reused from an earlier frame, not rebuilt ({wanted} of {nf} faces)")
+            };
+            let t = Instant::now();
             if missing {
                 // Only the faces not drawn yet (a moved camera's new ones), merged into the map.
                 let faces: Vec<bool> = match &have {
@@ -384,6 +392,9 @@ impl Renderer<'_> {
                     slot => *slot = Some(Arc::new(map)),
                 }
                 built += 1;
+                decisions.push(FrameDecision::new(what, true, format!("{reason} in {:.1} ms", super::ms(t))));
+            } else {
+                decisions.push(FrameDecision::new(what, true, reason));
             }
         }
         (cache.iter().map(|m| m.clone().expect("built above")).collect(), built, decisions)
@@ -402,7 +413,7 @@ impl Renderer<'_> {
     ) -> Shadowing<'r> {
         let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
         let n = w * h;
-        let lights = &self.scene.lights;
+        let lights = &self.lights;
         let nl = lights.len();
         let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
 
@@ -549,7 +560,7 @@ impl Renderer<'_> {
     fn borders(&self, bufs: &mut ShadowBuffers, w: usize, h: usize) {
         let opts = &self.options.shadow;
         let n = w * h;
-        let nl = self.scene.lights.len();
+        let nl = self.lights.len();
         bufs.border.clear();
         if self.options.shadows != Shadows::Smerts {
             bufs.und.reset(n, nl);
@@ -628,6 +639,18 @@ impl Renderer<'_> {
 
     /// Drops the cached light maps (made with other map options); with `kind_changed`, also
     /// which faces camera hits fall on (faces differ between map kinds).
+    /// Drops light `l`'s map (the light moved), keeping the others; which faces the camera
+    /// needs is found again, since light `l`'s depend on where it is.
+    pub(crate) fn drop_light_map(&mut self, l: usize) {
+        if let Some(m) = self.maps.maps.get_mut().unwrap_or_else(|e| e.into_inner()).get_mut(l) {
+            *m = None;
+        }
+        let moved = self.maps.moved.get_mut().unwrap_or_else(|e| e.into_inner());
+        moved.resize(moved.len().max(l + 1), false);
+        moved[l] = true;
+        self.maps.needed = std::sync::OnceLock::new();
+    }
+
     pub(crate) fn drop_light_maps(&mut self, kind_changed: bool) {
         self.maps.maps.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
         if kind_changed {
@@ -731,7 +754,7 @@ impl Shadowing<'_> {
                     .map(|&(l, k)| {
                         let (l, s) = (l as usize, &points[k as usize]);
                         let hint = cls[l].classify(s.p, s.tri).hint;
-                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.scene.lights[l].position);
+                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
                         r.pixel_rays.add(pixels[k as usize] as usize, &before, &c);
@@ -818,7 +841,7 @@ impl Shadowing<'_> {
                         continue;
                     }
                     let s = r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
-                    for (l, light) in r.scene.lights.iter().enumerate() {
+                    for (l, light) in r.lights.iter().enumerate() {
                         if !faces.get(i, l) {
                             continue;
                         }
@@ -883,7 +906,7 @@ impl Shadowing<'_> {
     /// when `Shadows::Smerts` and the map-space footprint disagrees or the face was not drawn,
     /// a shadow ray with the hint. `MirrorShadows::Rays`: always a ray.
     pub fn visible_at(&self, r: &Renderer, l: usize, s: &SurfaceHit, counts: &mut RayCounts) -> bool {
-        let light = &r.scene.lights[l];
+        let light = &r.lights[l];
         let ray = || spawn_ray_to(s.p, s.p_err, s.ng, light.position);
         if r.options.shadow.mirror == MirrorShadows::Rays {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);

@@ -28,7 +28,7 @@ use hyrt_tracer::{RayCounts, RayKind, offset::offset_ray_origin, spawn_ray};
 use rayon::prelude::*;
 
 use super::SurfaceHit;
-use crate::scene::Scene;
+use crate::scene::{PointLight, Scene};
 
 /// One virtual point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,9 +99,8 @@ fn cosine_hemisphere(n: Vec3, (u, v): (f32, f32)) -> Vec3 {
 
 /// Paths per light, proportional to the lights' power (largest remainder, ties to the first
 /// light), so that every path carries about the same flux.
-fn paths_per_light(scene: &Scene, total: u32) -> Vec<u32> {
-    let power: Vec<f64> =
-        scene.lights.iter().map(|l| f64::from(l.intensity.max_element().max(0.0))).collect();
+fn paths_per_light(lights: &[PointLight], total: u32) -> Vec<u32> {
+    let power: Vec<f64> = lights.iter().map(|l| f64::from(l.intensity.max_element().max(0.0))).collect();
     let sum: f64 = power.iter().sum();
     if sum <= 0.0 || total == 0 {
         return vec![0; power.len()];
@@ -126,15 +125,21 @@ fn paths_per_light(scene: &Scene, total: u32) -> Vec<u32> {
 }
 
 /// Traces the light paths of `opts` and returns their VPLs, in (light, path, bounce) order, with
-/// the rays cast (counted as [`RayKind::VplPath`]).
-pub fn generate(scene: &Scene, tracer: &hyrt_tracer::Tracer, opts: &VplOptions) -> (Vec<Vpl>, RayCounts) {
-    let per_light = paths_per_light(scene, opts.paths);
+/// the rays cast (counted as [`RayKind::VplPath`]). `lights` are the scene's, or moved ones
+/// ([`crate::render::Renderer::set_light`]).
+pub fn generate(
+    scene: &Scene,
+    lights: &[PointLight],
+    tracer: &hyrt_tracer::Tracer,
+    opts: &VplOptions,
+) -> (Vec<Vpl>, RayCounts) {
+    let per_light = paths_per_light(lights, opts.paths);
     let jobs: Vec<(usize, u32)> =
         per_light.iter().enumerate().flat_map(|(l, &n)| (0..n).map(move |k| (l, k))).collect();
     let traced: Vec<(Vec<Vpl>, RayCounts)> = jobs
         .par_iter()
         .map(|&(l, k)| {
-            let light = &scene.lights[l];
+            let light = &lights[l];
             let n = per_light[l];
             let index = u64::from(opts.seed) * u64::from(n) + u64::from(k);
             let mut flux = light.intensity * (4.0 * std::f32::consts::PI / n as f32);
@@ -218,8 +223,8 @@ mod tests {
         for i in [1.0, 3.0, 0.0] {
             s.lights.push(crate::scene::PointLight { position: Vec3::ZERO, intensity: Vec3::splat(i) });
         }
-        assert_eq!(paths_per_light(&s, 45), [11, 34, 0]);
-        assert_eq!(paths_per_light(&s, 1), [0, 1, 0]);
-        assert_eq!(paths_per_light(&s, 0), [0, 0, 0]);
+        assert_eq!(paths_per_light(&s.lights, 45), [11, 34, 0]);
+        assert_eq!(paths_per_light(&s.lights, 1), [0, 1, 0]);
+        assert_eq!(paths_per_light(&s.lights, 0), [0, 0, 0]);
     }
 }

@@ -26,12 +26,26 @@ pub struct FrameDecision {
     pub what: String,
     /// Whether work was done for it in this frame (a build, a map, rays).
     pub run: bool,
+    /// Whether cached data (a light map or some of its faces, the VPLs, their maps) was built
+    /// for it in this frame, rather than reused.
+    pub built: bool,
     pub reason: String,
 }
 
 impl FrameDecision {
+    /// A decision that built nothing.
     pub fn new(what: impl Into<String>, run: bool, reason: impl Into<String>) -> Self {
-        Self { what: what.into(), run, reason: reason.into() }
+        Self { what: what.into(), run, built: false, reason: reason.into() }
+    }
+
+    /// A decision that built (or extended) cached data.
+    pub fn built(what: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self { built: true, ..Self::new(what, true, reason) }
+    }
+
+    /// Cached data that was either built in this frame (work done) or reused (none).
+    pub fn cached(what: impl Into<String>, built: bool, reason: impl Into<String>) -> Self {
+        Self { built, ..Self::new(what, built, reason) }
     }
 }
 

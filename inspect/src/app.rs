@@ -2,23 +2,26 @@
 //! plan, times and rays on the right. All rendering happens on the [`Worker`]'s thread; this
 //! side only uploads the images it made and draws.
 
-use std::collections::HashMap;
-use std::time::Duration;
+use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::time::{Duration, Instant};
 
 use eframe::egui::{
     self, Align2, Color32, ColorImage, FontId, Pos2, Rect, RichText, Sense, Stroke, TextureHandle,
     TextureOptions, Vec2,
 };
+use glam::Vec3 as V3;
+use hyrt::plan::FrameDecision;
 use hyrt::render::{
-    Borders, Indirect, MirrorShadows, Options, Shadows, Visibility,
+    Borders, Indirect, MirrorShadows, Options, Pass, Shadows, Visibility,
     shadows::{RAY_HINT, RAY_TRAVERSAL},
 };
 use hyrt_shadowmap::{LightMap, MapKind};
 use hyrt_tracer::RayCounts;
 
+use crate::navigate;
 use crate::pick::{self, decision_name, tri_name};
 use crate::views::{self, RayKindView};
-use crate::worker::{Command, Loaded, Rendered, Reply, Setup, VplMap, Worker};
+use crate::worker::{Command, Loaded, Pose, Render, Rendered, Reply, Setup, VplMap, Worker};
 
 /// The views of the central panel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,6 +51,39 @@ const CUBE_FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
 const PARABOLOID_FACES: [&str; 2] = ["+Z hemisphere", "-Z hemisphere"];
 const PICK_COLOR: Color32 = Color32::from_rgb(0, 255, 255);
 const RESOLUTIONS: [u32; 9] = [64, 128, 256, 512, 1024, 1536, 2048, 4096, 8192];
+/// The key that brings the camera back to the scene file's.
+pub const RESET_KEY: egui::Key = egui::Key::R;
+/// How long the frame-time graph looks back.
+const HISTORY: Duration = Duration::from_secs(5);
+/// Radians the camera turns per point the pointer moves (orbit and look).
+const TURN_PER_POINT: f32 = 0.006;
+
+/// What was last asked of the worker.
+#[derive(Clone, Debug, PartialEq)]
+struct Sent {
+    options: Options,
+    pose: Pose,
+    full: bool,
+    reference: bool,
+}
+
+/// A frame received, for the fps and the frame-time graph.
+struct Sample {
+    at: Instant,
+    /// Milliseconds per top-level pass ([`Pass::part_of`] is `None`) and the frame's total.
+    passes: BTreeMap<&'static str, f64>,
+    total: f64,
+}
+
+/// What a drag in the viewport is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Drag {
+    Orbit,
+    Pan,
+    Look,
+    /// Moving the chosen light along a world axis (0: x, 1: y, 2: z).
+    Light(usize),
+}
 
 /// The inspector's state.
 pub struct Inspector {
@@ -58,7 +94,7 @@ pub struct Inspector {
     pub error: Option<String>,
     /// The knobs as set in the window; a change renders a new frame.
     pub options: Options,
-    sent: Option<Options>,
+    sent: Option<Sent>,
     generation: u64,
     /// The newest frame.
     pub result: Option<Box<Rendered>>,
@@ -78,6 +114,24 @@ pub struct Inspector {
     /// Show wall times as "…" (snapshot tests: times vary from run to run).
     pub hide_times: bool,
     scene_field: String,
+    /// Where the camera and lights are (the scene file's until moved); `home` is the file's.
+    pub pose: Option<Pose>,
+    home: Option<Pose>,
+    /// When the camera or a light last moved: frames stay light (the hybrid image alone) until
+    /// the input has rested for `rest`; then the full frame, its views and the reference.
+    moved_at: Option<Instant>,
+    pub rest: Duration,
+    /// Render the reference whenever the camera rests (else only when asked).
+    pub auto_reference: bool,
+    /// The pose and options the reference was asked for by hand.
+    reference_asked: Option<(Options, Pose)>,
+    history: VecDeque<Sample>,
+    drag: Option<Drag>,
+    /// The light the viewport's gizmo moves.
+    pub light_edit: usize,
+    /// Fly speed in scene units per second (from the scene's size).
+    fly_speed: f32,
+    camera_toml: Option<String>,
 }
 
 impl Inspector {
@@ -103,6 +157,60 @@ impl Inspector {
             center: Vec2::splat(0.5),
             picked: None,
             hide_times: false,
+            pose: None,
+            home: None,
+            moved_at: None,
+            rest: Duration::from_millis(300),
+            auto_reference: true,
+            reference_asked: None,
+            history: VecDeque::new(),
+            drag: None,
+            light_edit: 0,
+            fly_speed: 1.0,
+            camera_toml: None,
+        }
+    }
+
+    /// Whether the camera or a light moved less than `rest` ago.
+    pub fn moving(&self) -> bool {
+        self.moved_at.is_some_and(|t| t.elapsed() < self.rest)
+    }
+
+    /// What the worker should render now.
+    fn wanted(&self) -> Option<Sent> {
+        let pose = self.pose.clone()?;
+        let full = !self.moving();
+        let reference = full
+            && (self.auto_reference
+                || self.reference_asked.as_ref().is_some_and(|(o, p)| *o == self.options && *p == pose));
+        Some(Sent { options: self.options, pose, full, reference })
+    }
+
+    /// Moves the camera (as a drag, the wheel or a key does), rendering from there.
+    pub fn set_camera(&mut self, camera: hyrt::scene::Camera) {
+        if let Some(p) = &mut self.pose
+            && p.camera != camera
+        {
+            p.camera = camera;
+            self.moved_at = Some(Instant::now());
+        }
+    }
+
+    /// Moves light `l` to `position`.
+    pub fn move_light(&mut self, l: usize, position: V3) {
+        if let Some(light) = self.pose.as_mut().and_then(|p| p.lights.get_mut(l))
+            && light.position != position
+            && position.is_finite()
+        {
+            light.position = position;
+            self.moved_at = Some(Instant::now());
+        }
+    }
+
+    /// Back to the scene file's camera (the reset key). The lights stay where they are.
+    pub fn reset_camera(&mut self) {
+        if let Some(home) = self.home.clone() {
+            self.set_camera(home.camera);
         }
     }
 
@@ -115,10 +223,20 @@ impl Inspector {
             self.vpl_map.as_ref().is_none_or(|m| m.index != i)
                 && self.result.as_ref().is_some_and(|r| r.generation == g)
         });
+        // A full frame that asked for its reference waits for it (the worker sends it unless a
+        // newer command came first, which then answers instead).
+        let reference_pending = self.result.as_ref().is_some_and(|r| {
+            r.generation == self.generation
+                && r.comparison.is_none()
+                && self.sent.as_ref().is_some_and(|s| s.full && s.reference)
+        });
         self.worker.is_none()
             || self.loaded.is_none()
             || self.result.as_ref().is_none_or(|r| r.generation != self.generation)
             || vpl_pending
+            || reference_pending
+            || self.moving()
+            || self.wanted() != self.sent
     }
 
     /// Picks pixel `(x, y)` (as a click on it does).
@@ -159,16 +277,61 @@ impl Inspector {
             egui::ScrollArea::vertical().show(ui, |ui| self.details(ui));
         });
         egui::CentralPanel::default().show(ui, |ui| self.central(ui));
+        self.keys(ui.ctx());
 
-        if self.loaded.is_some() && self.sent != Some(self.options) {
+        // Commands never wait for a frame: the worker renders the newest when it is free.
+        if let Some(want) = self.wanted()
+            && self.sent.as_ref() != Some(&want)
+        {
             self.generation += 1;
-            self.sent = Some(self.options);
             if let Some(w) = &self.worker {
-                w.send(Command::Render { generation: self.generation, options: self.options });
+                w.send(Command::Render(Render {
+                    generation: self.generation,
+                    options: want.options,
+                    pose: want.pose.clone(),
+                    full: want.full,
+                    reference: want.reference,
+                }));
             }
+            self.sent = Some(want);
+        }
+        if let Some(t) = self.moved_at.filter(|_| self.moving()) {
+            // Wake up when the input has rested, for the full frame.
+            ui.ctx().request_repaint_after(self.rest.saturating_sub(t.elapsed()));
         }
         if self.busy() {
             ui.ctx().request_repaint_after(Duration::from_millis(100));
+        }
+    }
+
+    /// The reset key, and WASD/QE flight while the right button is held over the viewport.
+    fn keys(&mut self, ctx: &egui::Context) {
+        if ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        let Some(cam) = self.pose.as_ref().map(|p| p.camera) else { return };
+        if ctx.input(|i| i.key_pressed(RESET_KEY)) {
+            self.reset_camera();
+            return;
+        }
+        if self.drag != Some(Drag::Look) {
+            return;
+        }
+        let (dt, step) = ctx.input(|i| {
+            let axis = |neg: egui::Key, pos: egui::Key| {
+                f32::from(u8::from(i.key_down(pos))) - f32::from(u8::from(i.key_down(neg)))
+            };
+            let step = V3::new(
+                axis(egui::Key::A, egui::Key::D),
+                axis(egui::Key::Q, egui::Key::E),
+                axis(egui::Key::S, egui::Key::W),
+            );
+            (i.stable_dt.min(0.1), step)
+        });
+        if step != V3::ZERO {
+            let fast = if ctx.input(|i| i.modifiers.shift) { 4.0 } else { 1.0 };
+            self.set_camera(navigate::fly(&cam, step * (self.fly_speed * fast * dt)));
+            ctx.request_repaint();
         }
     }
 
@@ -178,10 +341,29 @@ impl Inspector {
             match reply {
                 Reply::Loaded(l) => {
                     self.options = l.options;
+                    let pose = Pose::of(&l.scene);
+                    self.fly_speed =
+                        l.scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length() * 0.25).max(1e-6);
+                    self.home = Some(pose.clone());
+                    self.pose = Some(pose);
                     self.loaded = Some(l);
                 }
                 Reply::Failed(e) => self.error = Some(e),
                 Reply::Rendered(r) => {
+                    let total = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                    let passes = r
+                        .frame
+                        .stats
+                        .time_ms
+                        .iter()
+                        .filter(|(k, _)| Pass::from_name(k).is_some_and(|p| p.part_of().is_none()))
+                        .map(|(k, v)| (*k, *v))
+                        .collect();
+                    let now = Instant::now();
+                    self.history.push_back(Sample { at: now, passes, total });
+                    while self.history.front().is_some_and(|s| now - s.at > HISTORY) {
+                        self.history.pop_front();
+                    }
                     self.textures.clear();
                     self.vpl_map = None;
                     self.vpl_requested = None;
@@ -189,6 +371,13 @@ impl Inspector {
                         self.light.min(r.frame.stats.lights.len().max(r.maps.len()).saturating_sub(1));
                     self.vpl = self.vpl.min(r.vpls.len().saturating_sub(1));
                     self.result = Some(r);
+                }
+                Reply::Compared { generation, comparison } => {
+                    if let Some(r) = self.result.as_mut().filter(|r| r.generation == generation) {
+                        r.comparison = Some(*comparison);
+                        self.textures.remove("reference");
+                        self.textures.remove("difference");
+                    }
                 }
                 Reply::VplMap(m) => self.vpl_map = Some(m),
             }
@@ -210,6 +399,11 @@ impl Inspector {
         self.vpl_requested = None;
         self.zoom = 1.0;
         self.center = Vec2::splat(0.5);
+        self.pose = None;
+        self.home = None;
+        self.moved_at = None;
+        self.history.clear();
+        self.light_edit = 0;
     }
 
     fn ms(&self, v: f64) -> String {
@@ -259,9 +453,6 @@ impl Inspector {
             }
             if let Some(r) = &self.result {
                 let hyb = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
-                let rf = r.reference.stats.time_ms.get("total").copied().unwrap_or(0.0);
-                let speed =
-                    if self.hide_times || hyb <= 0.0 { "…".into() } else { format!("{:.2}x", rf / hyb) };
                 ui.label(RichText::new(format!("hybrid frame {}", self.ms(hyb))).strong());
                 if let Some(first) = &r.first_frame {
                     let t = first.time_ms.get("total").copied().unwrap_or(0.0);
@@ -277,9 +468,22 @@ impl Inspector {
                     }
                     ui.label(format!("(first frame {}: built {})", self.ms(t), built.join(", ")));
                 }
-                ui.label(format!("reference {} ({speed} speed-up)", self.ms(rf)));
-                ui.separator();
-                ui.label(RichText::new(format!("PSNR {}", psnr_text(r.psnr))).strong());
+                match &r.comparison {
+                    Some(c) => {
+                        let rf = c.reference.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                        let speed = if self.hide_times || hyb <= 0.0 {
+                            "…".into()
+                        } else {
+                            format!("{:.2}x", rf / hyb)
+                        };
+                        ui.label(format!("reference {} ({speed} speed-up)", self.ms(rf)));
+                        ui.separator();
+                        ui.label(RichText::new(format!("PSNR {}", psnr_text(c.psnr))).strong());
+                    }
+                    None => {
+                        ui.label(reference_wait(r.full, self.auto_reference));
+                    }
+                }
                 ui.separator();
                 ui.label(wrong_text(r));
             }
@@ -390,13 +594,87 @@ impl Inspector {
                 r.dropped.join(", ")
             };
             ui.label(format!("Last change dropped: {dropped}"));
+            let reference = match &r.comparison {
+                Some(c) => format!(
+                    "reference {}{}",
+                    self.ms(c.reference.stats.time_ms.get("total").copied().unwrap_or(0.0)),
+                    if c.rendered { ", rendered again" } else { ", reused" }
+                ),
+                None => "no reference yet".into(),
+            };
             ui.label(format!(
-                "Frame {} (hybrid {}, reference {}{})",
+                "Frame {} ({}hybrid {}, {reference})",
                 r.generation,
+                if r.full { "" } else { "moving: " },
                 self.ms(r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0)),
-                self.ms(r.reference.stats.time_ms.get("total").copied().unwrap_or(0.0)),
-                if r.reference_rendered { ", rendered again" } else { ", reused" }
             ));
+        }
+        ui.add_space(8.0);
+        ui.separator();
+        self.camera_panel(ui);
+    }
+
+    /// The camera (position, reset, copy as TOML), the reference's schedule, and the lights.
+    fn camera_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Camera and lights");
+        let Some(pose) = self.pose.clone() else { return };
+        let c = pose.camera;
+        ui.label("Drag the hybrid image: left orbits, shift-left or middle pans, the wheel dollies; hold the right button to look around and fly with W A S D, Q E (shift: faster).");
+        ui.label(RichText::new(format!("eye {}", vec3(c.eye))).monospace());
+        ui.label(RichText::new(format!("target {}", vec3(navigate::target(&c)))).monospace());
+        ui.label(RichText::new(format!("fov_y {:.2}", c.fov_y_deg)).monospace());
+        ui.horizontal(|ui| {
+            if ui.button(format!("scene camera ({RESET_KEY:?})")).clicked() {
+                self.reset_camera();
+            }
+            if ui.button("copy as TOML").clicked() {
+                let t = navigate::toml(&c);
+                ui.ctx().copy_text(t.clone());
+                self.camera_toml = Some(t);
+            }
+        });
+        if let Some(t) = &self.camera_toml {
+            let mut text = t.clone();
+            let label = ui.label("copied (paste it into a scene file):");
+            ui.add(egui::TextEdit::multiline(&mut text).code_editor().desired_rows(5)).labelled_by(label.id);
+        }
+        ui.checkbox(&mut self.auto_reference, "reference when the camera rests")
+            .on_hover_text("Renders the ray-traced reference and the error views once the camera and lights stop moving; off: only when asked.");
+        if ui
+            .add_enabled(
+                !self.auto_reference && self.result.as_ref().is_some_and(|r| r.comparison.is_none()),
+                egui::Button::new("render the reference now"),
+            )
+            .clicked()
+        {
+            self.reference_asked = Some((self.options, pose.clone()));
+        }
+        let n = pose.lights.len();
+        if n == 0 {
+            return;
+        }
+        ui.add_space(4.0);
+        ui.label(RichText::new("Move a light").strong());
+        if n > 1 {
+            ui.add(egui::Slider::new(&mut self.light_edit, 0..=n - 1).text("light to move"));
+        }
+        self.light_edit = self.light_edit.min(n - 1);
+        let l = self.light_edit;
+        let mut p = pose.lights[l].position;
+        let speed = self.fly_speed * 0.01;
+        ui.horizontal(|ui| {
+            ui.label(format!("light {l}"));
+            for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+                ui.add(egui::DragValue::new(&mut p[axis]).speed(speed).prefix(format!("{name} ")));
+            }
+        });
+        self.move_light(l, p);
+        ui.label("or drag an axis of its handle in the hybrid image (x red, y green, z blue)");
+        let home = self.home.as_ref().and_then(|h| h.lights.get(l)).map(|h| h.position);
+        if let Some(h) = home.filter(|h| *h != p)
+            && ui.button("back to the scene file's position").clicked()
+        {
+            self.move_light(l, h);
         }
     }
 
@@ -408,6 +686,8 @@ impl Inspector {
             ui.label("Waiting for the first frame…");
             return;
         };
+        self.frame_rate(ui, &r);
+        ui.separator();
         self.pixel_panel(ui, &r);
         ui.separator();
         egui::CollapsingHeader::new("Plan").default_open(true).show(ui, |ui| {
@@ -418,6 +698,12 @@ impl Inspector {
                 decision_row(ui, run, d.pass.name(), &d.reason);
             }
             ui.add_space(4.0);
+            if !r.built_while_moving.is_empty() {
+                ui.label(RichText::new("Built by the frames drawn while moving (stats.decisions)").italics());
+                for d in &r.built_while_moving {
+                    decision_row(ui, d.run, &d.what, &self.times(&d.reason));
+                }
+            }
             if let Some(first) = &r.first_frame {
                 ui.label(RichText::new("First frame after the change (stats.decisions)").italics());
                 for d in &first.decisions {
@@ -442,7 +728,9 @@ impl Inspector {
                         ui.label(RichText::new("first frame").strong());
                     }
                     ui.end_row();
-                    let (h, rf) = (&r.frame.stats.time_ms, &r.reference.stats.time_ms);
+                    let empty = BTreeMap::new();
+                    let h = &r.frame.stats.time_ms;
+                    let rf = r.comparison.as_ref().map_or(&empty, |c| &c.reference.stats.time_ms);
                     let names = h.keys().chain(rf.keys()).chain(first.into_iter().flat_map(|f| f.keys()));
                     for pass in pass_order(names.copied()) {
                         ui.label(pass);
@@ -460,11 +748,12 @@ impl Inspector {
                 ui.label(RichText::new("hybrid").strong());
                 ui.label(RichText::new("reference").strong());
                 ui.end_row();
-                let (h, rf) = (&r.frame.stats.rays, &r.reference.stats.rays);
+                let h = &r.frame.stats.rays;
+                let rf = r.comparison.as_ref().map(|c| &c.reference.stats.rays);
                 for (name, f) in RAY_ROWS {
                     ui.label(name);
                     ui.label(f(h).to_string());
-                    ui.label(f(rf).to_string());
+                    ui.label(rf.map_or("-".into(), |rf| f(rf).to_string()));
                     ui.end_row();
                 }
             });
@@ -499,8 +788,76 @@ impl Inspector {
         self.result = Some(r);
     }
 
+    /// Frames per second while moving, what the newest frame reran, and a graph of the last
+    /// seconds' frame times, split by pass.
+    fn frame_rate(&mut self, ui: &mut egui::Ui, r: &Rendered) {
+        let recent: Vec<&Sample> = self.history.iter().collect();
+        let fps = match recent.as_slice() {
+            [first, .., last] if last.at > first.at => {
+                (recent.len() - 1) as f64 / (last.at - first.at).as_secs_f64()
+            }
+            _ => 0.0,
+        };
+        let total = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
+        let fps = if self.hide_times {
+            "… fps".to_string()
+        } else {
+            format!("{fps:.1} fps shown, {:.1} fps the frame alone", 1e3 / total.max(1e-3))
+        };
+        ui.label(
+            RichText::new(format!("{fps} ({} frames in {} s)", recent.len(), HISTORY.as_secs())).strong(),
+        );
+        ui.label(format!("This frame: {}", reran(&r.frame.stats)));
+        // Stacked bars, one per frame received, oldest on the left.
+        let (rect, _) =
+            ui.allocate_exact_size(Vec2::new(ui.available_width().min(340.0), 90.0), Sense::hover());
+        let painter = ui.painter().with_clip_rect(rect);
+        painter.rect_filled(rect, 2.0, Color32::from_gray(24));
+        let top = recent.iter().map(|s| s.total).fold(1.0, f64::max);
+        if !self.hide_times && !recent.is_empty() {
+            let now = Instant::now();
+            let span = HISTORY.as_secs_f64();
+            let bar = (rect.width() / 60.0).max(2.0);
+            for s in &recent {
+                let x = rect.max.x - ((now - s.at).as_secs_f64() / span) as f32 * rect.width();
+                let mut y = rect.max.y;
+                for (pass, ms) in pass_order(s.passes.keys().copied()).iter().map(|k| (*k, s.passes[k])) {
+                    let h = (ms / top) as f32 * (rect.height() - 4.0);
+                    let r = Rect::from_min_max(Pos2::new(x - bar, y - h), Pos2::new(x, y));
+                    painter.rect_filled(r, 0.0, pass_color(pass));
+                    y -= h;
+                }
+            }
+        }
+        painter.text(
+            rect.left_top() + Vec2::new(4.0, 2.0),
+            Align2::LEFT_TOP,
+            if self.hide_times { "… ms".to_string() } else { format!("{top:.0} ms") },
+            FontId::proportional(11.0),
+            Color32::GRAY,
+        );
+        let mut seen: Vec<&str> = recent.iter().flat_map(|s| s.passes.keys().copied()).collect();
+        seen.extend(
+            r.frame
+                .stats
+                .time_ms
+                .keys()
+                .copied()
+                .filter(|k| Pass::from_name(k).is_some_and(|p| p.part_of().is_none())),
+        );
+        ui.horizontal_wrapped(|ui| {
+            for pass in pass_order(seen.into_iter()) {
+                swatch(ui, pass_color(pass), pass);
+            }
+        });
+    }
+
     fn pixel_panel(&mut self, ui: &mut egui::Ui, r: &Rendered) {
         ui.heading("Pixel");
+        if !r.full {
+            ui.label("The camera is moving: picking works on the frame drawn when it rests.");
+            return;
+        }
         let info = match (self.picked, self.loaded.as_ref()) {
             (Some([x, y]), Some(l)) => pick::pick(l, r, x, y),
             _ => {
@@ -533,12 +890,14 @@ impl Inspector {
                 ui.label(format!("  t {:.4}  at {}", h.t, vec3(h.p)));
             }
         }
-        ui.label(format!(
-            "radiance hybrid {}  reference {}  |dY| {:.4}",
-            vec3(info.hybrid),
-            vec3(info.reference),
-            info.error
-        ));
+        match (info.reference, info.error) {
+            (Some(rf), Some(e)) => ui.label(format!(
+                "radiance hybrid {}  reference {}  |dY| {e:.4}",
+                vec3(info.hybrid),
+                vec3(rf)
+            )),
+            _ => ui.label(format!("radiance hybrid {} (no reference yet)", vec3(info.hybrid))),
+        };
         if let Some(c) = info.rays {
             ui.label(format!(
                 "rays here: primary {} shadow {} (hint hits {}) specular {} VPL shadow {}",
@@ -647,6 +1006,9 @@ impl Inspector {
         };
         match self.view {
             View::Frame => self.frame_view(ui, &r),
+            _ if !r.full => {
+                ui.label("The camera or a light is moving: this view is drawn when they rest (the Frame view follows every move).");
+            }
             View::Shadows => self.shadows_view(ui, &r),
             View::Rays => self.rays_view(ui, &r),
             View::LightMaps => self.maps_view(ui, &r),
@@ -657,20 +1019,34 @@ impl Inspector {
 
     fn frame_view(&mut self, ui: &mut egui::Ui, r: &Rendered) {
         let hyb = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
-        let rf = r.reference.stats.time_ms.get("total").copied().unwrap_or(0.0);
+        let wait = reference_wait(r.full, self.auto_reference);
+        let (reference, difference) = match &r.comparison {
+            Some(c) => {
+                let rf = c.reference.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                (
+                    (Some(&c.reference.image), format!("reference ({})", self.ms(rf))),
+                    (Some(&c.error_heat), format!("luminance error, PSNR {}", psnr_text(c.psnr))),
+                )
+            }
+            None => ((None, format!("reference: {wait}")), (None, format!("luminance error: {wait}"))),
+        };
         let mut cells = vec![
-            ("hybrid", &r.images.hybrid, format!("hybrid ({})", self.ms(hyb))),
-            ("reference", &r.reference.image, format!("reference ({})", self.ms(rf))),
-            ("difference", &r.images.error_heat, format!("luminance error, PSNR {}", psnr_text(r.psnr))),
+            (
+                "hybrid",
+                Some(&r.images.hybrid),
+                format!("hybrid ({}){}", self.ms(hyb), if r.full { "" } else { ", moving" }),
+            ),
+            ("reference", reference.0, reference.1),
+            ("difference", difference.0, difference.1),
         ];
         if let Some(w) = &r.images.wrong {
             cells.push((
                 "wrong",
-                w,
+                Some(w),
                 format!("wrong map decisions, any light ({} px)", r.wrong_pixels.unwrap_or(0)),
             ));
         }
-        self.screen_grid(ui, &cells, 2, 60.0);
+        self.screen_grid(ui, &cells, 2, 60.0, Some(r));
         legend_scale(
             ui,
             self,
@@ -714,10 +1090,11 @@ impl Inspector {
             ),
             ("rays", &li.rays, "selective rays: hint hit / traversal".to_string()),
         ];
+        let cells: Vec<_> = cells.iter().map(|(k, i, c)| (*k, Some(*i), c.clone())).collect();
         if smerts {
-            self.screen_grid(ui, &cells, 2, 70.0);
+            self.screen_grid(ui, &cells, 2, 70.0, None);
         } else {
-            self.screen_grid(ui, &cells[..1], 1, 70.0);
+            self.screen_grid(ui, &cells[..1], 1, 70.0, None);
         }
         ui.horizontal_wrapped(|ui| {
             swatch(ui, views::LIT_COLOR, "lit");
@@ -737,7 +1114,7 @@ impl Inspector {
     }
 
     fn rays_view(&mut self, ui: &mut egui::Ui, r: &Rendered) {
-        let cells: Vec<(&str, &ColorImage, String)> = r
+        let cells: Vec<(&str, Option<&ColorImage>, String)> = r
             .images
             .rays
             .iter()
@@ -745,14 +1122,14 @@ impl Inspector {
                 let total: u64 = RayKindView::count(*k, &r.frame.stats.rays);
                 let total =
                     if *k == RayKindView::Total { total - r.frame.stats.rays.vpl_path } else { total };
-                (k.name(), img, format!("{}: {total} rays, max {max} / px", k.name()))
+                (k.name(), Some(img), format!("{}: {total} rays, max {max} / px", k.name()))
             })
             .collect();
         if cells.is_empty() {
             ui.label("No per-pixel ray counts (they need Options::keep_buffers).");
             return;
         }
-        self.screen_grid(ui, &cells, 3, 40.0);
+        self.screen_grid(ui, &cells, 3, 40.0, None);
         legend_scale(
             ui,
             self,
@@ -874,8 +1251,9 @@ impl Inspector {
                     &r.images.hybrid,
                     "VPL positions",
                     Vec2::new(img_w, img_w * h / w),
+                    None,
                 );
-                let cam = self.loaded.as_ref().map(|l| l.camera);
+                let cam = Some(r.camera);
                 let g = r.frame.gbuffer.as_ref();
                 let painter = ui.painter().with_clip_rect(placed.rect);
                 let mut nearest: Option<(f32, usize)> = None;
@@ -957,15 +1335,18 @@ impl Inspector {
     }
 
     /// Screen-sized images in a grid of `cols` columns, as large as fits with `below` points
-    /// left under them; each captioned. Returns nothing: picking and zoom are handled inside.
+    /// left under them; each captioned (a missing image is a captioned blank). Returns nothing:
+    /// picking and zoom are handled inside. With `viewport`, the image keyed `hybrid` moves the
+    /// camera and the chosen light.
     fn screen_grid(
         &mut self,
         ui: &mut egui::Ui,
-        cells: &[(&str, &ColorImage, String)],
+        cells: &[(&str, Option<&ColorImage>, String)],
         cols: usize,
         below: f32,
+        viewport: Option<&Rendered>,
     ) {
-        let Some((_, first, _)) = cells.first() else { return };
+        let Some(first) = cells.iter().find_map(|c| c.1) else { return };
         let aspect = first.size[0] as f32 / first.size[1].max(1) as f32;
         let rows = cells.len().div_ceil(cols);
         let sp = ui.spacing().item_spacing;
@@ -980,7 +1361,16 @@ impl Inspector {
                     ui.vertical(|ui| {
                         ui.set_width(size.x);
                         ui.label(caption.as_str());
-                        self.screen_image(ui, key, img, &format!("{key} image"), size);
+                        match img {
+                            Some(img) => {
+                                let nav = viewport.filter(|_| *key == "hybrid");
+                                self.screen_image(ui, key, img, &format!("{key} image"), size, nav);
+                            }
+                            None => {
+                                let (rect, _) = ui.allocate_exact_size(size, Sense::hover());
+                                ui.painter().rect_filled(rect, 0.0, Color32::from_gray(30));
+                            }
+                        }
                     });
                 }
             });
@@ -988,7 +1378,8 @@ impl Inspector {
     }
 
     /// A screen-sized image: zoom (scroll), pan (drag), pick (click), reset (double-click),
-    /// with the picked pixel marked.
+    /// with the picked pixel marked. As the `viewport` of its frame, drags and the wheel move
+    /// the camera or the chosen light instead ([`Inspector::navigate`]).
     fn screen_image(
         &mut self,
         ui: &mut egui::Ui,
@@ -996,6 +1387,7 @@ impl Inspector {
         image: &ColorImage,
         label: &str,
         size: Vec2,
+        viewport: Option<&Rendered>,
     ) -> Placed {
         let tex = self.texture(ui.ctx(), key, image);
         let (rect, resp) = ui.allocate_exact_size(size, Sense::click_and_drag());
@@ -1003,14 +1395,18 @@ impl Inspector {
         resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Image, true, &label));
         let img = Vec2::new(image.size[0] as f32, image.size[1] as f32);
         let mut clicked_at = None;
-        if resp.hovered() {
+        let gizmo =
+            viewport.and_then(|r| self.gizmo(r, Placed { rect, uv: self.uv(), img, clicked_at: None }));
+        if let Some(r) = viewport {
+            self.navigate(ui, &resp, r, gizmo.as_ref());
+        } else if resp.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
                 let at = resp.hover_pos().map(|p| (p - rect.min) / rect.size());
                 self.zoom_by((scroll * 0.004).exp(), at);
             }
         }
-        if resp.dragged() {
+        if resp.dragged() && viewport.is_none() {
             self.center -= resp.drag_delta() / rect.size() / self.zoom;
             self.clamp_view();
         }
@@ -1030,6 +1426,17 @@ impl Inspector {
         let uv = self.uv();
         ui.painter().image(tex.id(), rect, uv, Color32::WHITE);
         let placed = Placed { rect, uv, img, clicked_at };
+        if let Some(g) = &gizmo {
+            let painter = ui.painter().with_clip_rect(rect);
+            for (axis, end) in g.ends.iter().enumerate() {
+                let active = self.drag == Some(Drag::Light(axis));
+                painter.line_segment(
+                    [g.at, *end],
+                    Stroke::new(if active { 4.0 } else { 2.5 }, AXIS_COLORS[axis]),
+                );
+            }
+            painter.circle(g.at, 5.0, Color32::from_rgb(255, 220, 80), Stroke::new(1.0, Color32::BLACK));
+        }
         if let Some([x, y]) = self.picked {
             let a = placed.to_screen(x as f32, y as f32);
             let b = placed.to_screen(x as f32 + 1.0, y as f32 + 1.0);
@@ -1042,6 +1449,87 @@ impl Inspector {
             );
         }
         placed
+    }
+
+    /// The handle of the light being edited, on the viewport `placed` of frame `r`: where the
+    /// light is, and the ends of its three axes (each a tenth of its distance to the eye).
+    fn gizmo(&self, r: &Rendered, placed: Placed) -> Option<Gizmo> {
+        let light = self.pose.as_ref()?.lights.get(self.light_edit)?.position;
+        let cam = &r.camera;
+        let (fx, fy, _) = views::project(cam, light)?;
+        let reach = (light - cam.eye).length() * 0.1;
+        let at = placed.to_screen(fx, fy);
+        let mut ends = [at; 3];
+        for (axis, end) in ends.iter_mut().enumerate() {
+            let (ex, ey, _) = views::project(cam, light + V3::AXES[axis] * reach)?;
+            *end = placed.to_screen(ex, ey);
+        }
+        Some(Gizmo { at, ends, reach })
+    }
+
+    /// Camera and light moves from the pointer over the viewport: left drag orbits (or moves
+    /// the light along the axis of its handle it started on), shift-left or middle drag pans,
+    /// the wheel dollies, the right button looks around (and lets W A S D, Q E fly).
+    fn navigate(&mut self, ui: &egui::Ui, resp: &egui::Response, r: &Rendered, gizmo: Option<&Gizmo>) {
+        let Some(cam) = self.pose.as_ref().map(|p| p.camera) else { return };
+        let (secondary, middle, shift, origin) = ui.input(|i| {
+            (
+                i.pointer.button_down(egui::PointerButton::Secondary),
+                i.pointer.button_down(egui::PointerButton::Middle),
+                i.modifiers.shift,
+                i.pointer.press_origin(),
+            )
+        });
+        if resp.is_pointer_button_down_on() && secondary {
+            self.drag = Some(Drag::Look);
+        } else if resp.drag_started() {
+            let axis = gizmo.zip(origin).and_then(|(g, o)| {
+                (0..3)
+                    .map(|a| (a, segment_distance(o, g.at, g.ends[a])))
+                    .filter(|(_, d)| *d < 8.0)
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(a, _)| a)
+            });
+            self.drag = Some(match axis {
+                Some(a) if !shift && !middle => Drag::Light(a),
+                _ if shift || middle => Drag::Pan,
+                _ => Drag::Orbit,
+            });
+        }
+        let d = resp.drag_delta();
+        let height = resp.rect.height().max(1.0) / self.zoom;
+        match self.drag {
+            _ if d == Vec2::ZERO => {}
+            Some(Drag::Orbit) => {
+                self.set_camera(navigate::orbit(&cam, -d.x * TURN_PER_POINT, d.y * TURN_PER_POINT))
+            }
+            Some(Drag::Pan) => self.set_camera(navigate::pan(&cam, d.x / height, d.y / height)),
+            Some(Drag::Look) => {
+                self.set_camera(navigate::look(&cam, -d.x * TURN_PER_POINT, -d.y * TURN_PER_POINT))
+            }
+            Some(Drag::Light(a)) => {
+                if let Some(g) = gizmo {
+                    let screen = g.ends[a] - g.at;
+                    let along = d.dot(screen) / screen.length_sq().max(1.0);
+                    let l = self.light_edit;
+                    if let Some(p) = self.pose.as_ref().and_then(|p| p.lights.get(l)).map(|l| l.position) {
+                        self.move_light(l, p + V3::AXES[a] * (along * g.reach));
+                    }
+                }
+            }
+            None => {}
+        }
+        let released = !resp.is_pointer_button_down_on() && !resp.dragged();
+        if released && (self.drag != Some(Drag::Look) || !secondary) {
+            self.drag = None;
+        }
+        if resp.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.set_camera(navigate::dolly(&cam, (-scroll * 0.002).exp(), self.fly_speed * 1e-3));
+            }
+        }
+        let _ = r;
     }
 
     /// An image fitted into `size` (no zoom); returns where it was drawn.
@@ -1094,6 +1582,84 @@ impl eframe::App for Inspector {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         self.show(ui);
     }
+}
+
+/// A light's handle on the viewport: where the light is and where its x, y, z axes end, and
+/// the world length of an axis.
+struct Gizmo {
+    at: Pos2,
+    ends: [Pos2; 3],
+    reach: f32,
+}
+
+const AXIS_COLORS: [Color32; 3] =
+    [Color32::from_rgb(235, 70, 70), Color32::from_rgb(80, 220, 80), Color32::from_rgb(80, 140, 255)];
+
+/// Distance from `p` to the segment `a`-`b`.
+fn segment_distance(p: Pos2, a: Pos2, b: Pos2) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
+}
+
+/// What a frame did again and what it reused, in a few words ("light maps reused, VPLs
+/// reused"), from its decisions.
+pub fn reran(stats: &hyrt::render::FrameStats) -> String {
+    let d = &stats.decisions;
+    let lights: Vec<_> = d.iter().filter(|d| d.what.starts_with("light ")).collect();
+    let mut parts = Vec::new();
+    let of = |extended: bool| -> Vec<&str> {
+        let faces = |d: &&&FrameDecision| d.reason.starts_with("map extended") == extended;
+        lights.iter().filter(|d| d.built).filter(faces).map(|d| d.what.as_str()).collect()
+    };
+    let (built, extended) = (of(false), of(true));
+    if !lights.is_empty() {
+        if built.is_empty() && extended.is_empty() {
+            parts.push("light maps reused".to_string());
+        }
+        if !extended.is_empty() {
+            parts.push(format!("light maps extended ({})", extended.join(", ")));
+        }
+        if !built.is_empty() {
+            parts.push(format!("light maps built ({})", built.join(", ")));
+        }
+    }
+    for (what, name) in [("vpls", "VPLs"), ("vpl_maps", "VPL maps")] {
+        if let Some(v) = d.iter().find(|d| d.what == what) {
+            parts.push(format!("{name} {}", if v.built { "rebuilt" } else { "reused" }));
+        }
+    }
+    if parts.is_empty() { "nothing cached to reuse".into() } else { parts.join(", ") }
+}
+
+/// Why a frame has no reference beside it.
+fn reference_wait(full: bool, auto: bool) -> &'static str {
+    match (full, auto) {
+        (false, _) => "drawn when the camera rests",
+        (true, true) => "rendering…",
+        (true, false) => "on demand (render the reference now)",
+    }
+}
+
+/// A pass's colour in the frame-time graph: one per top-level pass, in frame order.
+fn pass_color(pass: &str) -> Color32 {
+    const COLORS: [Color32; 12] = [
+        Color32::from_rgb(170, 170, 170),
+        Color32::from_rgb(86, 180, 233),
+        Color32::from_rgb(230, 159, 0),
+        Color32::from_rgb(0, 158, 115),
+        Color32::from_rgb(240, 228, 66),
+        Color32::from_rgb(213, 94, 0),
+        Color32::from_rgb(204, 121, 167),
+        Color32::from_rgb(0, 114, 178),
+        Color32::from_rgb(120, 200, 120),
+        Color32::from_rgb(255, 140, 140),
+        Color32::from_rgb(160, 120, 220),
+        Color32::from_rgb(250, 250, 250),
+    ];
+    let top = Pass::ALL.iter().filter(|p| p.part_of().is_none());
+    let i = top.clone().position(|p| p.name() == pass).unwrap_or(top.count());
+    COLORS[i % COLORS.len()]
 }
 
 /// Where a screen-sized image was drawn, and which part of it is visible.

@@ -21,10 +21,11 @@ pub struct PixelInfo {
     pub y: u32,
     /// The camera hit (G-buffer), if any.
     pub hit: Option<HitInfo>,
-    /// Linear radiance of the hybrid and the reference, and their display-luminance difference.
+    /// Linear radiance of the hybrid and (once rendered) the reference, and their
+    /// display-luminance difference.
     pub hybrid: Vec3,
-    pub reference: Vec3,
-    pub error: f32,
+    pub reference: Option<Vec3>,
+    pub error: Option<f32>,
     /// Rays cast on behalf of this pixel, by kind.
     pub rays: Option<RayCounts>,
     pub lights: Vec<LightPick>,
@@ -77,20 +78,22 @@ pub struct MapPick {
     pub lookup: Lookup,
 }
 
-/// What is known at pixel `(x, y)` of `r`.
+/// What is known at pixel `(x, y)` of `r` (a full frame: a moving one keeps no buffers, and
+/// shows no more than its radiance).
 pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
     let scene = &loaded.scene;
     let w = scene.settings.width;
     let i = (y * w + x) as usize;
     let hit = r.frame.gbuffer.as_ref().and_then(|g| g[i]);
-    let surf = hit.map(|h| SurfaceHit::new(scene, &h, loaded.camera.direction(x, y).normalize()));
+    let surf = hit.map(|h| SurfaceHit::new(scene, &h, r.camera.direction(x, y).normalize()));
     let hit_info = hit.zip(surf).map(|(h, s)| {
         let m = &scene.materials[scene.material[h.tri as usize] as usize];
         HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.clone() }
     });
     let bufs = r.frame.shadows.as_ref();
     let by_rays = r.options.shadows == Shadows::Rays;
-    let lights = scene
+    let lights = r
+        .pose
         .lights
         .iter()
         .enumerate()
@@ -138,8 +141,8 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
         y,
         hit: hit_info,
         hybrid: r.frame.film.pixels[i],
-        reference: r.reference.film.pixels[i],
-        error: r.images.error[i],
+        reference: r.comparison.as_ref().map(|c| c.reference.film.pixels[i]),
+        error: r.comparison.as_ref().map(|c| c.error[i]),
         rays: r.frame.pixel_rays.as_ref().map(|p| p[i]),
         lights,
     }

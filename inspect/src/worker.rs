@@ -10,6 +10,7 @@
 //! progress (rows done of the passes' rows) go back to the window, which is woken by `notify`.
 //! Commands that pile up while a frame renders are coalesced: only the newest knobs render.
 
+use std::collections::VecDeque;
 use std::sync::{
     Arc, Mutex,
     atomic::{AtomicU64, Ordering::Relaxed},
@@ -22,9 +23,9 @@ use eframe::egui::ColorImage;
 use hyrt::{
     camera::CameraRays,
     film::Film,
-    plan::Plan,
+    plan::{FrameDecision, Plan},
     render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, Visibility, vpl::Vpl},
-    scene::Scene,
+    scene::{Camera, PointLight, Scene},
 };
 use hyrt_shadowmap::{
     LightMap,
@@ -52,7 +53,6 @@ pub struct Setup {
 /// A scene loaded by the worker, shared with the window (for pixel picking).
 pub struct Loaded {
     pub scene: Arc<Scene>,
-    pub camera: CameraRays,
     /// Plane of every triangle: for re-classifying a picked pixel exactly as the renderer does.
     pub planes: Arc<Vec<Plane>>,
     /// The renderer's bound on a shading point's rounding ([`Renderer::point_error`]).
@@ -62,20 +62,44 @@ pub struct Loaded {
     pub load_ms: f64,
 }
 
-/// The reference frame, rendered again only when its options change.
+/// Where the camera and the lights are: the scene file's until the window moves them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    pub camera: Camera,
+    pub lights: Vec<PointLight>,
+}
+
+impl Pose {
+    /// The scene file's camera and lights.
+    pub fn of(scene: &Scene) -> Self {
+        Self { camera: scene.camera.expect("validated scene has a camera"), lights: scene.lights.clone() }
+    }
+}
+
+/// The reference frame, rendered again only when its options or the pose change.
 pub struct Reference {
     pub options: Options,
+    pub pose: Pose,
     pub film: Film,
     pub stats: FrameStats,
     pub image: ColorImage,
 }
 
-/// The images of a frame's views, made on the worker thread.
-pub struct Images {
-    pub hybrid: ColorImage,
+/// The reference set beside a hybrid frame: the reference of the same pose and options, and
+/// the error views made from the two.
+pub struct Comparison {
+    pub reference: Arc<Reference>,
+    /// Whether the reference was rendered for this frame (else an earlier one was reused).
+    pub rendered: bool,
+    pub psnr: f64,
     /// Per pixel, the display-luminance difference to the reference.
     pub error: Vec<f32>,
     pub error_heat: ColorImage,
+}
+
+/// The images of a frame's views, made on the worker thread.
+pub struct Images {
+    pub hybrid: ColorImage,
     /// With the visibility check: the pixels where some light's map decision is wrong.
     pub wrong: Option<ColorImage>,
     /// Per light (map-based shadows with kept buffers): occlusion, border before dilation,
@@ -103,18 +127,29 @@ pub struct MapImages {
 pub struct Rendered {
     /// The number of the render command this answers.
     pub generation: u64,
+    /// The options the frame was rendered with: the window's, except that a moving frame
+    /// keeps no buffers and runs no visibility check.
     pub options: Options,
-    /// What [`Renderer::set_options`] dropped for these knobs.
+    pub pose: Pose,
+    /// The camera of `pose`, for this image size (picking, projecting points).
+    pub camera: CameraRays,
+    /// A full frame: rendered with its inspection buffers, every view's images made. A moving
+    /// frame ([`Command::Render`] with `full: false`) has the hybrid image alone.
+    pub full: bool,
+    /// What [`Renderer::set_options`], [`Renderer::set_camera`] and [`Renderer::set_light`]
+    /// dropped for this command.
     pub dropped: Vec<&'static str>,
     pub plan: Plan,
     pub frame: Frame,
-    pub reference: Arc<Reference>,
+    /// The reference and the error views, when they exist for this pose and these options:
+    /// reused at once, or rendered afterwards ([`Reply::Compared`]) for a full frame that asks.
+    pub comparison: Option<Comparison>,
     /// When this command built light maps or VPLs: the stats of that first frame (`frame` is
-    /// then a second one, with the caches warm).
+    /// then a second one, with the caches warm). Full frames only.
     pub first_frame: Option<FrameStats>,
-    /// Whether the reference was rendered for this command (else reused).
-    pub reference_rendered: bool,
-    pub psnr: f64,
+    /// A full frame after moving ones: what those built (maps, faces, VPLs), with the time it
+    /// took, since this frame only reuses it.
+    pub built_while_moving: Vec<FrameDecision>,
     /// With the visibility check: pixels with at least one wrong map decision.
     pub wrong_pixels: Option<u64>,
     /// The point lights' maps (map-based shadows).
@@ -137,9 +172,9 @@ pub struct VplMap {
 }
 
 pub enum Command {
-    /// Render the hybrid frame with these options (and the reference, if its options changed).
-    /// A worker whose window is gone stops when the channel closes (after its current frame).
-    Render { generation: u64, options: Options },
+    /// Render the hybrid frame with these options, from this pose. A worker whose window is
+    /// gone stops when the channel closes (after its current frame).
+    Render(Render),
     /// The image of VPL `index`'s map.
     VplMap(usize),
 }
@@ -149,6 +184,11 @@ pub enum Reply {
     /// The scene could not be loaded (the message has the causes).
     Failed(String),
     Rendered(Box<Rendered>),
+    /// The reference rendered after frame `generation` had been sent.
+    Compared {
+        generation: u64,
+        comparison: Box<Comparison>,
+    },
     VplMap(Box<VplMap>),
 }
 
@@ -270,12 +310,9 @@ fn run(
         Err(e) => return reply(Reply::Failed(format!("{e:#}"))),
     };
     let scene = Arc::new(scene);
-    let cam = scene.camera.expect("validated scene has a camera");
-    let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
     let planes = Arc::new(triangle_planes(&scene.positions));
     reply(Reply::Loaded(Box::new(Loaded {
         scene: scene.clone(),
-        camera,
         planes,
         point_error: point_error_bound(&scene.positions),
         options,
@@ -284,140 +321,269 @@ fn run(
 
     progress.start(&format!("building the BVH of {} triangles", scene.triangle_count()), 0);
     notify();
-    let mut renderer = Renderer::new(&scene, options);
-    let mut reference: Option<Arc<Reference>> = None;
-    while let Ok(first) = commands.recv() {
-        let (newest, maps) = coalesce(std::iter::once(first).chain(commands.try_iter()));
-        if let Some((generation, options)) = newest {
-            let r = render(&mut renderer, &mut reference, generation, options, progress, notify);
+    let mut state = State {
+        renderer: Renderer::new(&scene, options),
+        pose: Pose::of(&scene),
+        reference: None,
+        queue: VecDeque::new(),
+        film: None,
+        built_while_moving: Vec::new(),
+    };
+    loop {
+        if state.queue.is_empty() {
+            match commands.recv() {
+                Ok(c) => state.queue.push_back(c),
+                Err(_) => return,
+            }
+        }
+        state.queue.extend(commands.try_iter());
+        let (newest, maps) = coalesce(state.queue.drain(..));
+        if let Some(Render { generation, options, pose, full, reference }) = newest {
+            let r = state.render(generation, options, pose, full, progress, notify);
+            let compare = full && reference && r.comparison.is_none();
             reply(Reply::Rendered(Box::new(r)));
+            // The reference comes after the frame it belongs to, unless the window has moved on.
+            state.queue.extend(commands.try_iter());
+            let waiting = state.queue.iter().any(|c| matches!(c, Command::Render(_)));
+            if compare && !waiting {
+                let comparison = state.compare(progress, notify);
+                reply(Reply::Compared { generation, comparison: Box::new(comparison) });
+            }
         }
         for i in maps {
-            reply(Reply::VplMap(Box::new(vpl_map(&renderer, i))));
+            reply(Reply::VplMap(Box::new(vpl_map(&state.renderer, i))));
         }
     }
 }
 
-/// The commands waiting: only the newest render matters (knobs dragged while a frame renders
-/// queue up); map requests are all answered, in order, after it.
-pub fn coalesce(commands: impl Iterator<Item = Command>) -> (Option<(u64, Options)>, Vec<usize>) {
+/// What a [`Command::Render`] asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Render {
+    /// The number the window gave the command; the frame answering it carries it back.
+    pub generation: u64,
+    /// The window's knobs.
+    pub options: Options,
+    pub pose: Pose,
+    /// With every view (else the hybrid image alone, as fast as the frame goes: the camera or
+    /// a light is moving).
+    pub full: bool,
+    /// With a full frame, also the reference of this pose and options (rendered only if the
+    /// last one is of another pose or other options, and dropped if newer commands wait).
+    pub reference: bool,
+}
+
+/// The commands waiting: only the newest render matters (knobs dragged or the camera moved
+/// while a frame renders queue up); map requests are all answered, in order, after it.
+pub fn coalesce(commands: impl Iterator<Item = Command>) -> (Option<Render>, Vec<usize>) {
     let (mut newest, mut maps) = (None, Vec::new());
     for cmd in commands {
         match cmd {
-            Command::Render { generation, options } => newest = Some((generation, options)),
+            Command::Render(r) => newest = Some(r),
             Command::VplMap(i) => maps.push(i),
         }
     }
     (newest, maps)
 }
 
-fn render(
-    renderer: &mut Renderer,
-    reference: &mut Option<Arc<Reference>>,
-    generation: u64,
-    mut options: Options,
-    progress: &Progress,
-    notify: &(dyn Fn() + Send + Sync),
-) -> Rendered {
-    let start = Instant::now();
-    options.keep_buffers = true;
-    let scene = renderer.scene;
-    let (w, h) = (scene.settings.width, scene.settings.height);
-    let exposure = scene.settings.exposure;
-    let dropped = renderer.set_options(options);
-    // Progress: rows of every pass, and a repaint every eighth of a pass.
-    let rows = |passes: u32, stage: &str| progress.start(stage, u64::from(h) * u64::from(passes));
+/// The worker's renderer and what it remembers between commands.
+struct State<'s> {
+    renderer: Renderer<'s>,
+    /// The pose the renderer is at.
+    pose: Pose,
+    /// The last reference rendered (reused while its pose and options hold).
+    reference: Option<Arc<Reference>>,
+    /// Commands received and not yet handled.
+    queue: VecDeque<Command>,
+    /// The last frame's image, for its reference's error views.
+    film: Option<Film>,
+    /// What the moving frames since the last full one built.
+    built_while_moving: Vec<FrameDecision>,
+}
+
+impl State<'_> {
+    /// Moves the renderer to `pose`: the camera, and each light that moved.
+    fn set_pose(&mut self, pose: Pose) -> Vec<&'static str> {
+        let mut dropped = Vec::new();
+        if pose.camera != self.pose.camera {
+            self.renderer.set_camera(&pose.camera);
+        }
+        for (l, light) in pose.lights.iter().enumerate() {
+            for d in self.renderer.set_light(l, *light) {
+                if !dropped.contains(&d) {
+                    dropped.push(d);
+                }
+            }
+        }
+        self.pose = pose;
+        dropped
+    }
+
+    /// The reference of the renderer's pose and hybrid options `o`, if the last one is.
+    fn reference_for(&self, o: &Options) -> Option<Arc<Reference>> {
+        let r = self.reference.as_ref()?;
+        (same_reference(&r.options, &reference_options(o)) && r.pose == self.pose).then(|| r.clone())
+    }
+
+    fn render(
+        &mut self,
+        generation: u64,
+        window_options: Options,
+        pose: Pose,
+        full: bool,
+        progress: &Progress,
+        notify: &(dyn Fn() + Send + Sync),
+    ) -> Rendered {
+        let start = Instant::now();
+        // A moving frame: the hybrid image alone, as fast as the frame goes.
+        let options = Options {
+            keep_buffers: full,
+            check_visibility: full && window_options.check_visibility,
+            ..window_options
+        };
+        let mut dropped = self.renderer.set_options(options);
+        dropped.extend(self.set_pose(pose));
+        let renderer = &mut self.renderer;
+        let scene = renderer.scene;
+        let (w, h) = (scene.settings.width, scene.settings.height);
+        let exposure = scene.settings.exposure;
+        let tick = ticker(progress, h, notify);
+
+        rows(progress, renderer, h, "rendering the hybrid frame");
+        let mut frame = renderer.render(&tick);
+        // The frame whose time is shown has warm caches and no visibility check (its rays run
+        // in the timed shadow-ray pass): render again if this one built maps or VPLs, or
+        // checked. Moving frames show what they cost, building included.
+        let built = frame.stats.maps_built > 0
+            || frame.stats.decisions.iter().any(|d| d.run && (d.what == "vpls" || d.what == "vpl_maps"));
+        let mut first_frame = None;
+        if full && (built || options.check_visibility) {
+            renderer.set_options(Options { check_visibility: false, ..options });
+            rows(progress, renderer, h, "rendering the hybrid frame again (timed: caches warm, no check)");
+            let mut timed = renderer.render(&tick);
+            renderer.set_options(options);
+            if options.check_visibility {
+                // The same decisions (the check only compares): take its verdicts over.
+                for (t, c) in timed.stats.lights.iter_mut().zip(&frame.stats.lights) {
+                    t.wrong = c.wrong;
+                }
+                if let (Some(t), Some(c)) = (timed.shadows.as_mut(), frame.shadows.as_mut()) {
+                    debug_assert_eq!(t.occ, c.occ);
+                    t.wrong = std::mem::take(&mut c.wrong);
+                }
+            }
+            if built {
+                first_frame = Some(frame.stats);
+            }
+            frame = timed;
+        }
+        let built_while_moving = if full {
+            std::mem::take(&mut self.built_while_moving)
+        } else {
+            self.built_while_moving.extend(frame.stats.decisions.iter().filter(|d| d.built).cloned());
+            Vec::new()
+        };
+        progress.start("making the views", 0);
+        notify();
+        let wrong_pixels = frame.shadows.as_ref().filter(|b| !b.wrong.is_empty()).map(|b| {
+            (0..frame.film.pixels.len())
+                .filter(|&i| b.wrong.iter().any(|l| l.get(i).copied().unwrap_or(false)))
+                .count() as u64
+        });
+        let renderer = &self.renderer;
+        let maps: Vec<Option<Arc<LightMap>>> = if options.shadows == Shadows::Rays {
+            vec![None; scene.lights.len()]
+        } else {
+            (0..scene.lights.len()).map(|l| renderer.light_map(l)).collect()
+        };
+        let (vpls, vpl_maps) = renderer.cached_vpls().map_or((Vec::new(), 0), |(v, m)| (v.to_vec(), m.len()));
+        let images = if full {
+            images(&frame, &maps, exposure, w, h)
+        } else {
+            Images {
+                hybrid: views::film_image(&frame.film, exposure),
+                wrong: None,
+                lights: Vec::new(),
+                rays: Vec::new(),
+                maps: Vec::new(),
+            }
+        };
+        let comparison =
+            self.reference_for(&options).map(|reference| comparison(reference, false, &frame.film, scene));
+        self.film = Some(frame.film.clone());
+        Rendered {
+            generation,
+            options,
+            camera: self.renderer.camera,
+            pose: self.pose.clone(),
+            full,
+            dropped,
+            plan: self.renderer.plan.clone(),
+            frame,
+            comparison,
+            first_frame,
+            built_while_moving,
+            wrong_pixels,
+            maps,
+            vpls,
+            vpl_maps,
+            bvh_ms: self.renderer.bvh_build_ms(),
+            images,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+        }
+    }
+
+    /// Renders the reference of the last frame's pose and options (the same renderer switched
+    /// to rays everywhere: same BVH, same VPLs), and compares the two.
+    fn compare(&mut self, progress: &Progress, notify: &(dyn Fn() + Send + Sync)) -> Comparison {
+        let options = *self.renderer.options();
+        let ref_opts = reference_options(&options);
+        let h = self.renderer.scene.settings.height;
+        let exposure = self.renderer.scene.settings.exposure;
+        self.renderer.set_options(ref_opts);
+        rows(progress, &self.renderer, h, "rendering the reference");
+        let f = self.renderer.render(&ticker(progress, h, notify));
+        let image = views::film_image(&f.film, exposure);
+        let reference = Arc::new(Reference {
+            options: ref_opts,
+            pose: self.pose.clone(),
+            film: f.film,
+            stats: f.stats,
+            image,
+        });
+        self.reference = Some(reference.clone());
+        self.renderer.set_options(options);
+        let film = self.film.as_ref().expect("a frame was rendered before its reference");
+        comparison(reference, true, film, self.renderer.scene)
+    }
+}
+
+/// The progress of `passes` passes of `h` rows each.
+fn rows(progress: &Progress, renderer: &Renderer, h: u32, stage: &str) {
+    progress.start(stage, u64::from(h) * u64::from(renderer.progress_passes()));
+}
+
+/// A row counter that repaints the window every eighth of a pass.
+fn ticker<'p>(progress: &'p Progress, h: u32, notify: &'p (dyn Fn() + Send + Sync)) -> impl Fn() + Sync + 'p {
     let step = (u64::from(h) / 8).max(1);
-    let tick = || {
+    move || {
         let d = progress.done.fetch_add(1, Relaxed) + 1;
         if d.is_multiple_of(step) {
             notify();
         }
-    };
-
-    let ref_opts = reference_options(&options);
-    let reference_rendered = reference.as_ref().is_none_or(|r| !same_reference(&r.options, &ref_opts));
-    if reference_rendered {
-        renderer.set_options(ref_opts);
-        rows(renderer.progress_passes(), "rendering the reference");
-        let f = renderer.render(&tick);
-        let image = views::film_image(&f.film, exposure);
-        *reference = Some(Arc::new(Reference { options: ref_opts, film: f.film, stats: f.stats, image }));
-        renderer.set_options(options);
-    }
-    let reference = reference.clone().expect("rendered above");
-
-    rows(renderer.progress_passes(), "rendering the hybrid frame");
-    let mut frame = renderer.render(&tick);
-    // The frame whose time is shown has warm caches and no visibility check (its rays run in
-    // the timed shadow-ray pass): render again if this one built maps or VPLs, or checked.
-    let built = frame.stats.maps_built > 0
-        || frame.stats.decisions.iter().any(|d| d.run && (d.what == "vpls" || d.what == "vpl_maps"));
-    let mut first_frame = None;
-    if built || options.check_visibility {
-        renderer.set_options(Options { check_visibility: false, ..options });
-        rows(renderer.progress_passes(), "rendering the hybrid frame again (timed: caches warm, no check)");
-        let mut timed = renderer.render(&tick);
-        if options.check_visibility {
-            // The same decisions (the check only compares): take its verdicts over.
-            for (t, c) in timed.stats.lights.iter_mut().zip(&frame.stats.lights) {
-                t.wrong = c.wrong;
-            }
-            if let (Some(t), Some(c)) = (timed.shadows.as_mut(), frame.shadows.as_mut()) {
-                debug_assert_eq!(t.occ, c.occ);
-                t.wrong = std::mem::take(&mut c.wrong);
-            }
-        }
-        if built {
-            first_frame = Some(frame.stats);
-        }
-        frame = timed;
-    }
-    progress.start("making the views", 0);
-    notify();
-    let psnr = hyrt::measure::psnr(scene, &reference.film, &frame.film).unwrap_or(f64::NAN);
-    let wrong_pixels = frame.shadows.as_ref().filter(|b| !b.wrong.is_empty()).map(|b| {
-        (0..frame.film.pixels.len())
-            .filter(|&i| b.wrong.iter().any(|l| l.get(i).copied().unwrap_or(false)))
-            .count() as u64
-    });
-    let maps: Vec<Option<Arc<LightMap>>> = if options.shadows == Shadows::Rays {
-        vec![None; scene.lights.len()]
-    } else {
-        (0..scene.lights.len()).map(|l| renderer.light_map(l)).collect()
-    };
-    let (vpls, vpl_maps) = renderer.cached_vpls().map_or((Vec::new(), 0), |(v, m)| (v.to_vec(), m.len()));
-    let images = images(&frame, &reference, &maps, exposure, w, h);
-    Rendered {
-        generation,
-        options,
-        dropped,
-        plan: renderer.plan.clone(),
-        frame,
-        reference,
-        first_frame,
-        reference_rendered,
-        psnr,
-        wrong_pixels,
-        maps,
-        vpls,
-        vpl_maps,
-        bvh_ms: renderer.bvh_build_ms(),
-        images,
-        wall_ms: start.elapsed().as_secs_f64() * 1e3,
     }
 }
 
+/// The comparison of `frame` with `reference`.
+fn comparison(reference: Arc<Reference>, rendered: bool, film: &Film, scene: &Scene) -> Comparison {
+    let (w, h) = (film.width, film.height);
+    let error = views::luminance_error(film, &reference.film, scene.settings.exposure);
+    let psnr = hyrt::measure::psnr(scene, &reference.film, film).unwrap_or(f64::NAN);
+    let error_heat = views::error_heat(&error, w, h);
+    Comparison { reference, rendered, psnr, error, error_heat }
+}
+
 /// Every image of the frame's views.
-fn images(
-    frame: &Frame,
-    reference: &Reference,
-    maps: &[Option<Arc<LightMap>>],
-    exposure: f32,
-    w: u32,
-    h: u32,
-) -> Images {
-    let error = views::luminance_error(&frame.film, &reference.film, exposure);
+fn images(frame: &Frame, maps: &[Option<Arc<LightMap>>], exposure: f32, w: u32, h: u32) -> Images {
     let back = views::backdrop(&frame.film, exposure);
     let lights = frame.shadows.as_ref().map_or_else(Vec::new, |b| {
         (0..b.occ.len())
@@ -460,15 +626,7 @@ fn images(
             (0..back.len()).map(|i| b.wrong.iter().any(|l| l.get(i).copied().unwrap_or(false))).collect();
         views::mask_image_in(&any, &back, w, h, views::WRONG_COLOR)
     });
-    Images {
-        hybrid: views::film_image(&frame.film, exposure),
-        wrong,
-        error_heat: views::error_heat(&error, w, h),
-        error,
-        lights,
-        rays,
-        maps,
-    }
+    Images { hybrid: views::film_image(&frame.film, exposure), wrong, lights, rays, maps }
 }
 
 fn vpl_map(renderer: &Renderer, index: usize) -> VplMap {
@@ -500,14 +658,23 @@ mod tests {
         let o = Options::hybrid();
         let mut p = o;
         p.shadow.bias = 3.0;
+        let scene = hyrt::scene::builtin::cornell();
+        let pose = Pose::of(&scene);
+        let render = |generation, options| Render {
+            generation,
+            options,
+            pose: pose.clone(),
+            full: true,
+            reference: true,
+        };
         let cmds = vec![
-            Command::Render { generation: 1, options: o },
+            Command::Render(render(1, o)),
             Command::VplMap(4),
-            Command::Render { generation: 2, options: p },
+            Command::Render(render(2, p)),
             Command::VplMap(2),
         ];
         let (newest, maps) = coalesce(cmds.into_iter());
-        assert_eq!(newest, Some((2, p)));
+        assert_eq!(newest, Some(render(2, p)));
         assert_eq!(maps, vec![4, 2]);
         assert_eq!(coalesce(std::iter::once(Command::VplMap(1))), (None, vec![1]));
     }

@@ -213,7 +213,9 @@ fn zoomed_images_pick_the_pixel_under_the_pointer() {
     let r = h.get_by_label("reference image").rect();
     at(&mut h, r.min + Vec2::splat(1.0));
     assert_eq!(h.state().picked, Some([24, 18]));
-    // Dragging pans (left by a quarter of the image: the window's left edge moves right).
+    // Dragging pans (left by a quarter of the image: the window's left edge moves right). The
+    // hybrid image is the camera's viewport (a drag there orbits): drag the reference.
+    let rect = r;
     let start = rect.center();
     h.event(egui::Event::PointerMoved(start));
     h.event(egui::Event::PointerButton {
@@ -237,6 +239,7 @@ fn zoomed_images_pick_the_pixel_under_the_pointer() {
     h.run();
     at(&mut h, rect.min + Vec2::splat(1.0));
     assert_eq!(h.state().picked, Some([48, 18]), "panned by half the window (a quarter of the image)");
+    assert_eq!(h.state().pose.as_ref().unwrap().camera, scene_camera(&h), "the camera did not move");
     h.get_by_label("reset view").click();
     h.run();
     h.get_by_label("zoom 1.0x");
@@ -253,4 +256,155 @@ fn a_scene_that_fails_to_load_shows_the_error() {
             || h.query_all_by_label_contains("missing-scene.toml").count() >= 2
     );
     h.snapshot("load_error");
+}
+
+fn scene_camera(h: &Harness<'static, Inspector>) -> hyrt::scene::Camera {
+    h.state().loaded.as_ref().expect("loaded").scene.camera.expect("a camera")
+}
+
+/// Presses `button` at `from`, moves to `to` in ten steps, and releases it there.
+fn drag(h: &mut Harness<'static, Inspector>, button: egui::PointerButton, from: egui::Pos2, to: egui::Pos2) {
+    h.event(egui::Event::PointerMoved(from));
+    h.event(egui::Event::PointerButton { pos: from, button, pressed: true, modifiers: Default::default() });
+    h.run();
+    for i in 1..=10 {
+        h.event(egui::Event::PointerMoved(from + (to - from) * (i as f32 / 10.0)));
+        h.step();
+    }
+    h.event(egui::Event::PointerButton { pos: to, button, pressed: false, modifiers: Default::default() });
+    h.step();
+    h.remove_cursor();
+}
+
+/// A left drag across the hybrid image orbits the camera about the scene's target, and the new
+/// frame reuses the light maps and says so; the reset key brings the scene's camera back;
+/// "copy as TOML" gives the view as a scene file's table.
+#[test]
+fn a_drag_orbits_the_camera_and_the_reset_key_restores_it() {
+    let mut o = options();
+    o.indirect = Indirect::None;
+    o.check_visibility = false;
+    let mut h = harness(setup("cornell", o));
+    settle(&mut h);
+    let home = scene_camera(&h);
+    let rect = h.get_by_label("hybrid image").rect();
+    drag(&mut h, egui::PointerButton::Primary, rect.center(), rect.center() + Vec2::new(40.0, 10.0));
+    settle(&mut h);
+    let cam = h.state().pose.as_ref().unwrap().camera;
+    assert_ne!(cam.eye, home.eye, "the drag moved the camera");
+    let target = |c: &hyrt::scene::Camera| c.eye + c.forward;
+    assert!((target(&cam) - target(&home)).length() < 1e-4, "about the scene's target");
+    {
+        let r = h.state().result.as_ref().expect("rendered");
+        assert_eq!(r.pose.camera, cam, "the frame shown is of the new view");
+        assert!(r.full && r.comparison.as_ref().is_some_and(|c| c.reference.pose.camera == cam));
+        assert_eq!(r.frame.stats.maps_built, 0);
+    }
+    assert!(h.query_all_by_label_contains("light maps reused").count() >= 1);
+    h.get_by_label(&format!("eye ({:.3}, {:.3}, {:.3})", cam.eye.x, cam.eye.y, cam.eye.z));
+
+    h.get_by_label("copy as TOML").click();
+    h.step();
+    let copied = h.output().platform_output.commands.iter().find_map(|c| match c {
+        egui::OutputCommand::CopyText(t) => Some(t.clone()),
+        _ => None,
+    });
+    let t = copied.expect("copied");
+    assert!(t.starts_with("[camera]\neye = [") && t.contains("fov_y = "), "{t}");
+    h.run();
+
+    h.key_press(hyrt_inspect::app::RESET_KEY);
+    settle(&mut h);
+    assert_eq!(h.state().pose.as_ref().unwrap().camera, home);
+    assert_eq!(h.state().result.as_ref().unwrap().pose.camera, home);
+}
+
+/// Dragging the x axis of a light's handle in the hybrid image moves that light along x: one
+/// light map is built again (the other is reused), and the decisions say why.
+#[test]
+fn dragging_a_light_handle_rebuilds_its_map_alone() {
+    let mut o = options();
+    o.indirect = Indirect::None;
+    o.check_visibility = false;
+    let mut h = harness(setup("cornell", o));
+    settle(&mut h);
+    let before = h.state().pose.as_ref().unwrap().lights.clone();
+    assert!(before.len() >= 2, "the test needs a second light that stays");
+    // Light 0's handle: where it projects, and the screen direction of its x axis.
+    let rect = h.get_by_label("hybrid image").rect();
+    let (at, end) = {
+        let r = h.state().result.as_ref().unwrap();
+        let p = before[0].position;
+        let reach = (p - r.camera.eye).length() * 0.1;
+        let screen = |q: glam::Vec3| {
+            let (fx, fy, _) = hyrt_inspect::views::project(&r.camera, q).expect("in front");
+            rect.min + Vec2::new(fx / 96.0 * rect.width(), fy / 72.0 * rect.height())
+        };
+        (screen(p), screen(p + glam::Vec3::X * reach))
+    };
+    assert!(rect.contains(at), "light 0 is in view");
+    let grab = at + (end - at) * 0.6;
+    drag(&mut h, egui::PointerButton::Primary, grab, grab + (end - at) * 0.5);
+    settle(&mut h);
+    let after = h.state().pose.as_ref().unwrap().lights.clone();
+    let moved = after[0].position - before[0].position;
+    assert!(moved.x > 0.0 && moved.y == 0.0 && moved.z == 0.0, "moved along x: {moved}");
+    assert_eq!(after[1], before[1]);
+    assert_eq!(h.state().pose.as_ref().unwrap().camera, scene_camera(&h), "the camera stays");
+    let r = h.state().result.as_ref().unwrap();
+    assert_eq!(r.pose.lights, after);
+    // The frames drawn while dragging rebuilt the map; the full frame at rest reuses it and
+    // shows what they built.
+    let built: Vec<_> = r.built_while_moving.iter().map(|d| d.what.as_str()).collect();
+    assert!(!built.is_empty() && built.iter().all(|w| *w == "light 0"), "{built:?}");
+    assert_eq!(r.frame.stats.maps_built, 0);
+    assert!(h.query_all_by_label_contains("map rebuilt: the light moved").count() >= 1);
+}
+
+/// Keys pressed and the camera moved while frames render neither block the window nor panic:
+/// every step returns while the worker is busy, and the last view is the one rendered.
+#[test]
+fn keys_while_rendering_do_not_block() {
+    let mut o = options();
+    o.indirect_opts.vpl.paths = 32;
+    let mut h = harness(setup("cornell", o));
+    // Long rests: every move is a light frame until the test says otherwise.
+    h.state_mut().rest = Duration::from_secs(3600);
+    settle(&mut h);
+    let rect = h.get_by_label("hybrid image").rect();
+    let mut busy_steps = 0;
+    let right = egui::PointerButton::Secondary;
+    h.event(egui::Event::PointerMoved(rect.center()));
+    h.event(egui::Event::PointerButton {
+        pos: rect.center(),
+        button: right,
+        pressed: true,
+        modifiers: Default::default(),
+    });
+    h.step();
+    for i in 0..40 {
+        let key = [egui::Key::W, egui::Key::A, egui::Key::E, egui::Key::R, egui::Key::S][i % 5];
+        h.key_down(key);
+        h.event(egui::Event::PointerMoved(rect.center() + Vec2::new(i as f32, 0.0)));
+        h.step();
+        h.key_up(key);
+        h.step();
+        busy_steps += usize::from(h.state().busy());
+    }
+    h.event(egui::Event::PointerButton {
+        pos: rect.center(),
+        button: right,
+        pressed: false,
+        modifiers: Default::default(),
+    });
+    h.step();
+    assert!(busy_steps > 0, "keys were pressed while the worker rendered");
+    let moved = h.state().pose.as_ref().unwrap().camera;
+    assert_ne!(moved, scene_camera(&h), "flying and looking moved the camera");
+    assert!(h.state().moving());
+    // Rest: the full frame of the last view, with its reference.
+    h.state_mut().rest = Duration::ZERO;
+    settle(&mut h);
+    let r = h.state().result.as_ref().unwrap();
+    assert!(r.full && r.pose.camera == moved && r.comparison.is_some());
 }

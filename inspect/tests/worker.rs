@@ -5,8 +5,8 @@ use std::time::{Duration, Instant};
 
 use hyrt::render::{Indirect, Options, shadows::RAY_NONE};
 use hyrt_inspect::{
-    Setup, pick,
-    worker::{Command, Rendered, Reply, Worker},
+    Setup, navigate, pick,
+    worker::{Command, Comparison, Pose, Render, Rendered, Reply, Worker},
 };
 use hyrt_shadowmap::border::NONE;
 
@@ -47,6 +47,22 @@ fn rendered(w: &Worker) -> Box<Rendered> {
     }
 }
 
+/// The reference rendered after frame `generation`.
+fn compared(w: &Worker, generation: u64) -> Comparison {
+    match next(w) {
+        Reply::Compared { generation: g, comparison } => {
+            assert_eq!(g, generation);
+            *comparison
+        }
+        _ => panic!("expected the reference"),
+    }
+}
+
+/// A full frame with its reference.
+fn full(generation: u64, options: Options, pose: &Pose) -> Command {
+    Command::Render(Render { generation, options, pose: pose.clone(), full: true, reference: true })
+}
+
 #[test]
 fn renders_and_keeps_what_a_change_leaves_valid() {
     let w = Worker::spawn(setup(small_hybrid()), || {});
@@ -56,13 +72,17 @@ fn renders_and_keeps_what_a_change_leaves_valid() {
     assert_eq!(loaded.options.shadow.map.resolution, 256);
     assert!(loaded.options.keep_buffers);
 
-    w.send(Command::Render { generation: 1, options: loaded.options });
+    let pose = Pose::of(&loaded.scene);
+    w.send(full(1, loaded.options, &pose));
     let a = rendered(&w);
     assert_eq!(a.generation, 1);
-    assert!(a.reference_rendered);
-    assert!(a.psnr > 30.0, "{}", a.psnr);
+    assert!(a.full);
+    assert!(a.comparison.is_none(), "the reference comes after the frame");
+    let ac = compared(&w, 1);
+    assert!(ac.rendered);
+    assert!(ac.psnr > 30.0, "{}", ac.psnr);
     assert_eq!(a.images.hybrid.size, [96, 72]);
-    assert_eq!(a.images.error.len(), 96 * 72);
+    assert_eq!(ac.error.len(), 96 * 72);
     assert_eq!(a.images.lights.len(), loaded.scene.lights.len());
     assert_eq!(a.images.rays.len(), 6);
     assert!(a.maps.iter().all(|m| m.as_ref().is_some_and(|m| m.resolution() == 256)));
@@ -73,28 +93,29 @@ fn renders_and_keeps_what_a_change_leaves_valid() {
     assert!(a.wrong_pixels.is_some());
     assert!(a.frame.stats.lights.iter().all(|l| l.wrong.is_some()));
     assert_eq!(a.frame.shadows.as_ref().expect("kept").wrong.len(), loaded.scene.lights.len());
-    assert_eq!(a.reference.stats.rays.primary, 96 * 72);
+    assert_eq!(ac.reference.stats.rays.primary, 96 * 72);
     assert_eq!(a.frame.stats.rays.primary, 0, "raster visibility");
 
     // A new bias rebuilds nothing, and the reference is reused.
     let mut o = loaded.options;
     o.shadow.bias = 2.0;
-    w.send(Command::Render { generation: 2, options: o });
+    w.send(full(2, o, &pose));
     let b = rendered(&w);
     assert_eq!(b.generation, 2);
     assert!(b.dropped.is_empty(), "{:?}", b.dropped);
-    assert!(!b.reference_rendered);
+    let bc = b.comparison.as_ref().expect("the reference is reused at once");
+    assert!(!bc.rendered);
     assert_eq!(b.frame.stats.maps_built, 0);
     assert!(b.first_frame.is_none(), "nothing was built");
     assert!(b.wrong_pixels.is_some(), "still checked");
-    assert_eq!(b.reference.film, a.reference.film);
+    assert_eq!(bc.reference.film, ac.reference.film);
 
     // A new resolution rebuilds the light maps only. Two commands in a row: the second may
     // be coalesced with the first (if it queued while the first rendered), or render after it.
     o.shadow.map.resolution = 128;
-    w.send(Command::Render { generation: 3, options: o });
+    w.send(full(3, o, &pose));
     o.shadow.map.resolution = 512;
-    w.send(Command::Render { generation: 4, options: o });
+    w.send(full(4, o, &pose));
     let mut c = rendered(&w);
     if c.generation == 3 {
         assert_eq!(c.dropped, vec!["light maps"]);
@@ -109,12 +130,13 @@ fn renders_and_keeps_what_a_change_leaves_valid() {
     o.indirect = Indirect::Maps;
     o.indirect_opts.vpl.paths = 6;
     o.indirect_opts.map.resolution = 128;
-    w.send(Command::Render { generation: 5, options: o });
+    w.send(full(5, o, &pose));
     w.send(Command::VplMap(1));
     let d = rendered(&w);
-    assert!(d.reference_rendered);
-    assert_eq!(d.reference.options.indirect, Indirect::Rays);
-    assert!(d.reference.stats.rays.vpl_shadow > 0);
+    let dc = compared(&w, 5);
+    assert!(dc.rendered);
+    assert_eq!(dc.reference.options.indirect, Indirect::Rays);
+    assert!(dc.reference.stats.rays.vpl_shadow > 0);
     assert!(!d.vpls.is_empty());
     assert_eq!(d.vpl_maps, d.vpls.len());
     let Reply::VplMap(m) = next(&w) else { panic!("expected a VPL map") };
@@ -140,7 +162,13 @@ fn a_missing_scene_is_an_error_reply() {
 fn picking_agrees_with_the_frame_buffers() {
     let w = Worker::spawn(setup(small_hybrid()), || {});
     let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
-    w.send(Command::Render { generation: 1, options: loaded.options });
+    w.send(Command::Render(Render {
+        generation: 1,
+        options: loaded.options,
+        pose: Pose::of(&loaded.scene),
+        full: true,
+        reference: false,
+    }));
     let r = rendered(&w);
     let g = r.frame.gbuffer.as_ref().expect("kept");
     let b = r.frame.shadows.as_ref().expect("kept");
@@ -172,4 +200,67 @@ fn picking_agrees_with_the_frame_buffers() {
         }
     }
     assert!(decided > 1000 && rays > 10, "{decided} {rays}");
+}
+
+/// A moving camera gets light frames (the hybrid image alone, maps and VPLs reused); at rest
+/// the full frame and the reference of the new view follow. A moved light rebuilds its own
+/// map and the VPLs, and the frame says so.
+#[test]
+fn moves_render_light_frames_and_reuse_the_maps() {
+    let mut o = small_hybrid();
+    o.indirect = Indirect::Maps;
+    o.indirect_opts.vpl.paths = 4;
+    o.indirect_opts.map.resolution = 64;
+    let w = Worker::spawn(setup(o), || {});
+    let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
+    let home = Pose::of(&loaded.scene);
+    w.send(full(1, o, &home));
+    let a = rendered(&w);
+    let ac = compared(&w, 1);
+
+    let mut pose = home.clone();
+    pose.camera = navigate::orbit(&home.camera, 0.15, 0.05);
+    w.send(Command::Render(Render {
+        generation: 2,
+        options: o,
+        pose: pose.clone(),
+        full: false,
+        reference: true,
+    }));
+    let m = rendered(&w);
+    assert!(!m.full && m.comparison.is_none(), "a moving frame has no reference");
+    assert!(m.frame.gbuffer.is_none() && m.frame.shadows.is_none(), "nor inspection buffers");
+    assert!(m.images.lights.is_empty() && m.images.rays.is_empty());
+    assert_eq!(m.images.hybrid.size, [96, 72]);
+    assert_ne!(m.frame.film, a.frame.film, "the view moved");
+    assert_eq!(m.frame.stats.maps_built, 0, "the Cornell box's maps serve a small orbit");
+    let reran = hyrt_inspect::app::reran(&m.frame.stats);
+    assert_eq!(reran, "light maps reused, VPLs reused, VPL maps reused");
+    assert!(m.frame.stats.rays.vpl_path == 0, "no VPL was traced again");
+
+    w.send(full(3, o, &pose));
+    let f = rendered(&w);
+    assert!(f.full && f.frame.gbuffer.is_some());
+    let fc = compared(&w, 3);
+    assert!(fc.rendered, "a new view's reference");
+    assert_eq!(fc.reference.pose, pose);
+    assert_ne!(fc.reference.film, ac.reference.film);
+
+    let mut lit = pose.clone();
+    lit.lights[0].position += glam::Vec3::new(0.05, -0.05, 0.02);
+    w.send(Command::Render(Render {
+        generation: 4,
+        options: o,
+        pose: lit.clone(),
+        full: true,
+        reference: false,
+    }));
+    let l = rendered(&w);
+    assert_eq!(l.dropped, vec!["the light's map", "VPLs and their maps"]);
+    let first = l.first_frame.as_ref().expect("the moved light's frame built its map");
+    assert_eq!(first.maps_built, 1);
+    assert!(first.decisions.iter().any(|d| d.what == "light 0" && d.reason.contains("the light moved")));
+    assert!(first.decisions.iter().any(|d| d.what == "light 1" && d.reason.contains("reused")));
+    assert!(l.comparison.is_none(), "not asked for");
+    assert_eq!(l.pose, lit);
 }

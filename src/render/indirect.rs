@@ -139,7 +139,7 @@ impl Renderer<'_> {
             stats.rays += self.vpl_cache.vpls.get().expect("just made").1;
         }
         let cause = self.vpl_cache.cause.map_or(String::new(), |c| format!(" ({c})"));
-        stats.decisions.push(FrameDecision::new(
+        stats.decisions.push(FrameDecision::cached(
             "vpls",
             fresh,
             if fresh {
@@ -181,7 +181,7 @@ impl Renderer<'_> {
         stats.record(super::Pass::VplMapBuild, t);
         if self.options.indirect == Indirect::Maps {
             let n = self.options.indirect_opts.map.resolution;
-            stats.decisions.push(FrameDecision::new(
+            stats.decisions.push(FrameDecision::cached(
                 "vpl_maps",
                 fresh,
                 if fresh {

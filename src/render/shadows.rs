@@ -392,7 +392,7 @@ impl Renderer<'_> {
                     slot => *slot = Some(Arc::new(map)),
                 }
                 built += 1;
-                decisions.push(FrameDecision::new(what, true, format!("{reason} in {:.1} ms", super::ms(t))));
+                decisions.push(FrameDecision::built(what, format!("{reason} in {:.1} ms", super::ms(t))));
             } else {
                 decisions.push(FrameDecision::new(what, true, reason));
             }

@@ -398,9 +398,9 @@ fn a_moved_camera_draws_only_the_faces_it_newly_needs() {
 }
 
 /// A light moved between two frames: its map alone is built again (the other light's map is
-/// the same object, reused), the VPLs and their maps are traced again from the moved lights,
-/// and the image equals a fresh renderer's image of the scene with the light there, byte for
-/// byte.
+/// the same object, reused), its VPLs alone are traced again and get new maps (the other
+/// light's are kept), and the image equals a fresh renderer's image of the scene with the
+/// light there, byte for byte. A new intensity retraces every VPL (paths go by power).
 #[test]
 fn a_moved_light_rebuilds_exactly_its_own_map() {
     let mut s = box_on_floor(8);
@@ -408,15 +408,20 @@ fn a_moved_light_rebuilds_exactly_its_own_map() {
     let mut opts = with(Shadows::Smerts, MapKind::Cube);
     opts.check_visibility = false;
     opts.indirect = hyrt::render::Indirect::Maps;
-    opts.indirect_opts.vpl.paths = 8;
+    opts.indirect_opts.vpl.paths = 32;
     opts.indirect_opts.map.resolution = 64;
     let moved_light = light(vec3(-0.5, 1.8, 1.2), 6.0);
 
     let mut r = Renderer::new(&s, opts);
     r.render(&|| {});
     let kept = r.light_map(0).unwrap();
+    let of = |r: &Renderer, l: u32| -> Vec<_> {
+        r.cached_vpls().unwrap().0.iter().filter(|v| v.light == l).copied().collect()
+    };
+    let (vpls0, vpls1) = (of(&r, 0), of(&r, 1));
+    assert!(!vpls0.is_empty() && !vpls1.is_empty(), "both lights leave VPLs");
     assert_eq!(r.set_light(1, s.lights[1]), Vec::<&str>::new(), "an unchanged light drops nothing");
-    assert_eq!(r.set_light(1, moved_light), vec!["the light's map", "VPLs and their maps"]);
+    assert_eq!(r.set_light(1, moved_light), vec!["the light's map", "the light's VPLs and their maps"]);
     let f = r.render(&|| {});
     assert_eq!(f.stats.maps_built, 1, "one map built");
     assert!(std::sync::Arc::ptr_eq(&kept, &r.light_map(0).unwrap()), "light 0's map was rebuilt");
@@ -424,8 +429,12 @@ fn a_moved_light_rebuilds_exactly_its_own_map() {
         |what: &str, text: &str| f.stats.decisions.iter().any(|d| d.what == what && d.reason.contains(text));
     assert!(says("light 0", "map reused"), "{:#?}", f.stats.decisions);
     assert!(says("light 1", "map rebuilt: the light moved"), "{:#?}", f.stats.decisions);
-    assert!(says("vpls", "generated from 8 light path(s) (a light moved)"), "{:#?}", f.stats.decisions);
-    assert!(says("vpl_maps", "built (a light moved)"), "{:#?}", f.stats.decisions);
+    let retraced = format!("{} traced again from the moved light(s), {} reused", vpls1.len(), vpls0.len());
+    assert!(says("vpls", &retraced), "{:#?}", f.stats.decisions);
+    let rebuilt = format!("{} of {} paraboloid maps", vpls1.len(), vpls0.len() + vpls1.len());
+    assert!(says("vpl_maps", &rebuilt), "{:#?}", f.stats.decisions);
+    assert_eq!(of(&r, 0), vpls0, "light 0's VPLs are kept");
+    assert_ne!(of(&r, 1), vpls1, "light 1's VPLs moved with it");
     assert_eq!(r.lights()[1], moved_light);
 
     let mut fresh_scene = s.clone();
@@ -435,4 +444,18 @@ fn a_moved_light_rebuilds_exactly_its_own_map() {
         |f: &Frame| f.film.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
     assert!(bits(&f) == bits(&fresh), "the moved light's image differs from a fresh one");
     assert_ne!(bits(&f), bits(&Renderer::new(&s, opts).render(&|| {})), "the light did not move");
+
+    // A new intensity shares the paths out afresh: every VPL is traced again.
+    let brighter = light(moved_light.position, 12.0);
+    assert_eq!(r.set_light(1, brighter), vec!["VPLs and their maps"]);
+    let f = r.render(&|| {});
+    assert_eq!(f.stats.maps_built, 0, "the map depends on the position alone");
+    assert!(says_in(&f, "vpls", "generated from 32 light path(s) (a light's intensity changed)"));
+    fresh_scene.lights[1] = brighter;
+    let fresh = Renderer::new(&fresh_scene, opts).render(&|| {});
+    assert!(bits(&f) == bits(&fresh), "the brighter light's image differs from a fresh one");
+}
+
+fn says_in(f: &Frame, what: &str, text: &str) -> bool {
+    f.stats.decisions.iter().any(|d| d.what == what && d.reason.contains(text))
 }

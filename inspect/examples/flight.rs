@@ -51,8 +51,7 @@ fn main() -> anyhow::Result<()> {
         at += Vec2::new(rect.width() * 0.12 / steps as f32, -rect.height() * 0.03 / steps as f32);
         h.event(egui::Event::PointerMoved(at));
         h.step();
-        let shown =
-            |a: &Inspector| a.result.as_ref().zip(a.pose.as_ref()).is_some_and(|(r, p)| r.pose == *p);
+        let shown = |a: &Inspector| a.result.as_ref().zip(a.pose.as_ref()).is_some_and(|(r, p)| r.pose == *p);
         wait(&mut h, &shown)?;
     }
     // The graph keeps repainting while moving: a few steps, not `run` (which waits for rest).

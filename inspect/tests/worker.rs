@@ -256,7 +256,7 @@ fn moves_render_light_frames_and_reuse_the_maps() {
         reference: false,
     }));
     let l = rendered(&w);
-    assert_eq!(l.dropped, vec!["the light's map", "VPLs and their maps"]);
+    assert_eq!(l.dropped, vec!["the light's map", "the light's VPLs and their maps"]);
     let first = l.first_frame.as_ref().expect("the moved light's frame built its map");
     assert_eq!(first.maps_built, 1);
     assert!(first.decisions.iter().any(|d| d.what == "light 0" && d.reason.contains("the light moved")));

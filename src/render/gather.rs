@@ -657,7 +657,8 @@ mod tests {
         let o = Vec3::new(0.0, 1.0, 0.0);
         let opts = MapOptions { resolution: res, ..MapOptions::default() };
         let map = VplMap::build(&tris, &planes, o, Vec3::NEG_Y, &opts, format);
-        let v = Vpl { position: o, normal: Vec3::NEG_Y, intensity: Vec3::new(1.0, 2.0, 3.0), tri: 0 };
+        let v =
+            Vpl { position: o, normal: Vec3::NEG_Y, intensity: Vec3::new(1.0, 2.0, 3.0), tri: 0, light: 0 };
         let c = VplConsts::new(&v, &map, 0.0, 0.5, 1e-7);
         (map, c)
     }

@@ -90,6 +90,17 @@ pub(crate) struct VplCache {
     maps: OnceLock<Vec<VplMap>>,
     /// Why the cache was emptied, for the decision of the frame that fills it again.
     cause: Option<&'static str>,
+    /// After lights moved ([`VplCache::relight`]): the VPLs and maps from before, which the
+    /// next frame keeps for the lights that did not move.
+    previous: std::sync::Mutex<Option<Previous>>,
+}
+
+/// The VPLs (and maps) of a cache some of whose lights moved.
+struct Previous {
+    vpls: Vec<vpl::Vpl>,
+    maps: Option<Vec<VplMap>>,
+    /// Per light, whether it moved (its VPLs are traced again).
+    moved: Vec<bool>,
 }
 
 impl Renderer<'_> {
@@ -110,6 +121,23 @@ impl VplCache {
     /// Drops the VPL maps (made with other map options), keeping the VPLs.
     pub(crate) fn drop_maps(&mut self) {
         self.maps = OnceLock::new();
+        if let Some(p) = self.previous.get_mut().unwrap_or_else(|e| e.into_inner()) {
+            p.maps = None;
+        }
+    }
+
+    /// Light `l` (of `lights`) moved, with the same intensity: the next frame traces its
+    /// VPLs again and builds their maps, and keeps the other lights' VPLs and maps
+    /// ([`vpl::generate_from`]: they are the ones a fresh renderer would make).
+    pub(crate) fn relight(&mut self, l: usize, lights: usize) {
+        let previous = self.previous.get_mut().unwrap_or_else(|e| e.into_inner());
+        if let Some((vpls, _)) = self.vpls.take() {
+            *previous = Some(Previous { vpls, maps: self.maps.take(), moved: vec![false; lights] });
+        }
+        if let Some(p) = previous.as_mut().filter(|p| l < p.moved.len()) {
+            p.moved[l] = true;
+        }
+        self.cause = Some("a light moved");
     }
 }
 
@@ -131,9 +159,27 @@ impl Renderer<'_> {
         let opts = &self.options.indirect_opts;
         let t = Instant::now();
         let mut fresh = false;
+        let previous = self.vpl_cache.previous.lock().unwrap_or_else(|e| e.into_inner()).take();
+        // With lights moved: the VPLs traced again, of how many.
+        let mut retraced = None;
         let (vpls, _) = self.vpl_cache.vpls.get_or_init(|| {
             fresh = true;
-            vpl::generate(self.scene, &self.lights, &self.tracer, &opts.vpl)
+            match &previous {
+                Some(p) => {
+                    let (new, counts) =
+                        vpl::generate_from(self.scene, &self.lights, &self.tracer, &opts.vpl, &p.moved);
+                    retraced = Some(new.len());
+                    // In light order, as `generate` makes them.
+                    let merged = (0..self.lights.len() as u32)
+                        .flat_map(|l| {
+                            let from = if p.moved[l as usize] { &new } else { &p.vpls };
+                            from.iter().filter(move |v| v.light == l).copied()
+                        })
+                        .collect();
+                    (merged, counts)
+                }
+                None => vpl::generate(self.scene, &self.lights, &self.tracer, &opts.vpl),
+            }
         });
         if fresh {
             stats.rays += self.vpl_cache.vpls.get().expect("just made").1;
@@ -142,7 +188,14 @@ impl Renderer<'_> {
         stats.decisions.push(FrameDecision::cached(
             "vpls",
             fresh,
-            if fresh {
+            if let Some(m) = retraced {
+                format!(
+                    "{} VPLs: {m} traced again from the moved light(s), {} reused{cause} in {:.1} ms",
+                    vpls.len(),
+                    vpls.len() - m,
+                    super::ms(t)
+                )
+            } else if fresh {
                 format!(
                     "{} VPLs generated from {} light path(s){cause} in {:.1} ms",
                     vpls.len(),
@@ -156,24 +209,53 @@ impl Renderer<'_> {
         stats.record(super::Pass::VplGen, t);
         let t = Instant::now();
         let mut fresh = false;
+        let mut built = 0;
         let maps: &[VplMap] = if self.options.indirect == Indirect::Maps {
             self.vpl_cache.maps.get_or_init(|| {
                 fresh = true;
                 let planes = self.occluders().0;
+                // The maps of VPLs kept from before (lights that did not move), in order.
+                let mut kept: Vec<Option<VplMap>> = match previous {
+                    Some(Previous { vpls: old, maps: Some(maps), moved }) => {
+                        let mut by_light: Vec<std::collections::VecDeque<VplMap>> =
+                            (0..moved.len()).map(|_| Default::default()).collect();
+                        for (v, m) in old.iter().zip(maps) {
+                            by_light[v.light as usize].push_back(m);
+                        }
+                        vpls.iter()
+                            .map(|v| {
+                                let l = v.light as usize;
+                                if moved[l] { None } else { by_light[l].pop_front() }
+                            })
+                            .collect()
+                    }
+                    _ => vpls.iter().map(|_| None).collect(),
+                };
                 // Maps in parallel as well as inside each build: a small map's build has too
                 // little work per parallel step to keep both cores busy alone.
-                vpls.par_iter()
-                    .map(|v| {
-                        VplMap::build(
-                            &self.scene.positions,
-                            planes,
-                            v.position,
-                            v.normal,
-                            &opts.map,
-                            opts.format,
+                let new: Vec<(usize, VplMap)> = (0..vpls.len())
+                    .into_par_iter()
+                    .filter(|&i| kept[i].is_none())
+                    .map(|i| {
+                        let v = &vpls[i];
+                        (
+                            i,
+                            VplMap::build(
+                                &self.scene.positions,
+                                planes,
+                                v.position,
+                                v.normal,
+                                &opts.map,
+                                opts.format,
+                            ),
                         )
                     })
-                    .collect()
+                    .collect();
+                built = new.len();
+                for (i, m) in new {
+                    kept[i] = Some(m);
+                }
+                kept.into_iter().map(|m| m.expect("kept or built")).collect()
             })
         } else {
             &[]
@@ -184,7 +266,13 @@ impl Renderer<'_> {
             stats.decisions.push(FrameDecision::cached(
                 "vpl_maps",
                 fresh,
-                if fresh {
+                if fresh && built < maps.len() {
+                    format!(
+                        "{built} of {} paraboloid maps of {n}x{n} built{cause}, the others reused, in {:.1} ms",
+                        maps.len(),
+                        super::ms(t)
+                    )
+                } else if fresh {
                     format!(
                         "{} paraboloid maps of {n}x{n} built{cause} in {:.1} ms",
                         maps.len(),

@@ -391,11 +391,12 @@ impl<'a> Renderer<'a> {
         &self.lights
     }
 
-    /// Moves (or changes the intensity of) light `l`. What depends on that light alone is
-    /// dropped: its map, which the next frame builds again (the other lights' maps are kept and
-    /// reused), and the VPLs with their maps, which are traced from all the lights. The next
-    /// frame's decisions say what was rebuilt and how long it took. Returns what was dropped;
-    /// nothing when the light is unchanged, or `l` is not a light.
+    /// Moves (or changes the intensity of) light `l`. What depends on that light is dropped:
+    /// its map, which the next frame builds again (the other lights' maps are kept and reused),
+    /// and the VPLs its paths left, with their maps (all VPLs when the intensity changed, since
+    /// the paths are shared out by power). The next frame's decisions say what was rebuilt and
+    /// how long it took. Returns what was dropped; nothing when the light is unchanged, or `l`
+    /// is not a light.
     pub fn set_light(&mut self, l: usize, light: crate::scene::PointLight) -> Vec<&'static str> {
         let Some(old) = self.lights.get(l).copied() else { return Vec::new() };
         if old == light {
@@ -409,8 +410,14 @@ impl<'a> Renderer<'a> {
             self.drop_light_map(l);
             dropped.push("the light's map");
         }
-        self.vpl_cache = indirect::VplCache::dropped_because("a light moved");
-        dropped.push("VPLs and their maps");
+        if old.intensity == light.intensity {
+            // The paths are shared out by power: the same, so the other lights' VPLs stay.
+            self.vpl_cache.relight(l, self.lights.len());
+            dropped.push("the light's VPLs and their maps");
+        } else {
+            self.vpl_cache = indirect::VplCache::dropped_because("a light's intensity changed");
+            dropped.push("VPLs and their maps");
+        }
         self.plan = Plan::with_lights(self.scene, &self.lights, &self.options);
         dropped
     }

@@ -42,6 +42,8 @@ pub struct Vpl {
     pub intensity: Vec3,
     /// Triangle the VPL lies on.
     pub tri: u32,
+    /// The point light whose path left it.
+    pub light: u32,
 }
 
 /// How VPLs are generated.
@@ -133,9 +135,27 @@ pub fn generate(
     tracer: &hyrt_tracer::Tracer,
     opts: &VplOptions,
 ) -> (Vec<Vpl>, RayCounts) {
+    generate_from(scene, lights, tracer, opts, &vec![true; lights.len()])
+}
+
+/// The VPLs of [`generate`] that come from the lights `from[l]` selects, in the same order and
+/// with the same values: a path depends on its own light only (and on the powers of all the
+/// lights, which share the paths out), so the VPLs of one moved light can be traced again
+/// alone and put back among the others'.
+pub fn generate_from(
+    scene: &Scene,
+    lights: &[PointLight],
+    tracer: &hyrt_tracer::Tracer,
+    opts: &VplOptions,
+    from: &[bool],
+) -> (Vec<Vpl>, RayCounts) {
     let per_light = paths_per_light(lights, opts.paths);
-    let jobs: Vec<(usize, u32)> =
-        per_light.iter().enumerate().flat_map(|(l, &n)| (0..n).map(move |k| (l, k))).collect();
+    let jobs: Vec<(usize, u32)> = per_light
+        .iter()
+        .enumerate()
+        .filter(|(l, _)| from.get(*l).copied().unwrap_or(false))
+        .flat_map(|(l, &n)| (0..n).map(move |k| (l, k)))
+        .collect();
     let traced: Vec<(Vec<Vpl>, RayCounts)> = jobs
         .par_iter()
         .map(|&(l, k)| {
@@ -160,6 +180,7 @@ pub fn generate(
                         normal: s.ng,
                         intensity: flux / std::f32::consts::PI,
                         tri: h.tri,
+                        light: l as u32,
                     });
                     let dir = cosine_hemisphere(s.ng, halton2(index, dim));
                     dim += 1;

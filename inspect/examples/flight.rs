@@ -47,16 +47,26 @@ fn main() -> anyhow::Result<()> {
         modifiers: Default::default(),
     });
     h.step();
+    // Per moving frame: the worker's wall time for the command, and the hybrid frame's own.
+    let (mut wall, mut frame) = (Vec::new(), Vec::<f64>::new());
     for _ in 0..steps {
         at += Vec2::new(rect.width() * 0.12 / steps as f32, -rect.height() * 0.03 / steps as f32);
         h.event(egui::Event::PointerMoved(at));
         h.step();
         let shown = |a: &Inspector| a.result.as_ref().zip(a.pose.as_ref()).is_some_and(|(r, p)| r.pose == *p);
         wait(&mut h, &shown)?;
+        let r = h.state().result.as_ref().expect("shown");
+        wall.push(r.wall_ms);
+        frame.push(r.frame.stats.time_ms["total"]);
     }
     // The graph keeps repainting while moving: a few steps, not `run` (which waits for rest).
     h.run_steps(3);
     h.render().map_err(anyhow::Error::msg)?.save(&out)?;
-    println!("{out}");
+    let median = |v: &[f64]| hyrt::measure::Timing::of(v).median;
+    println!(
+        "{out}: {steps} moving frames, median {:.1} ms per command ({:.1} ms the hybrid frame)",
+        median(&wall),
+        median(&frame)
+    );
     Ok(())
 }

@@ -509,7 +509,10 @@ impl State<'_> {
         };
         let comparison =
             self.reference_for(&options).map(|reference| comparison(reference, false, &frame.film, scene));
-        self.film = Some(frame.film.clone());
+        if full {
+            // Only a full frame gets a reference afterwards.
+            self.film = Some(frame.film.clone());
+        }
         Rendered {
             generation,
             options,

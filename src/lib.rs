@@ -11,6 +11,7 @@ pub mod cli;
 pub mod film;
 pub mod measure;
 pub mod metrics;
+pub mod options;
 pub mod orbit;
 pub mod output;
 pub mod plan;

@@ -6,6 +6,7 @@
 use serde::Serialize;
 
 use crate::{
+    options::Choice,
     render::{Indirect, Options, Pass, Shadows, Visibility},
     scene::{PointLight, Scene},
 };

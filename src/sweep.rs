@@ -36,7 +36,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 
 use crate::{
-    cli::{Knobs, options_json, parse_size},
+    cli::{Knobs, parse_size},
     film::Film,
     measure::{Config, MeasureOptions, Measurement, measure},
     metrics::{DisplayImage, flip_mean},
@@ -440,7 +440,7 @@ fn reference_flags(reference: &str, combos: &[Combo]) -> Result<(Vec<String>, Op
     let mut flags = split_flags(reference);
     let k =
         Knobs::from_flags(&flags).map_err(|e| anyhow!("--reference '{reference}': {}", flag_error(&e)))?;
-    if k.indirect.is_some() || k.vpls.is_some() {
+    if k.given("indirect").is_some() || k.given("vpls").is_some() {
         return Ok((flags, None));
     }
     let Some(c) = combos.iter().find(|c| c.options.indirect != Indirect::None) else {
@@ -620,7 +620,7 @@ fn json(ctx: &Sweep, reference: &Row, rows: &[Row]) -> Result<serde_json::Value>
             "label": r.label,
             "knobs": knobs,
             "flags": r.flags,
-            "options": options_json(&r.options, max_depth),
+            "options": crate::options::to_json(&r.options, max_depth),
             "measurement": measurement_json(&r.m)?,
             "reference_ms_side_by_side": r.ref_ms,
             "speedup_vs_reference": r.speedup,

@@ -348,7 +348,7 @@ fn smerts_presets_and_knobs_from_the_cli() {
     assert_fails(&d, &["--preset", "hybrid", "--bias", "-1"], &["--bias must be a finite number >= 0"]);
     assert_fails(&d, &["--preset", "hybrid", "--tess", "0"], &["--tess must be > 0"]);
     assert_fails(&d, &["--shadow-map-res", "0"], &["--shadow-map-res"]);
-    assert_fails(&d, &["--borders", "edges"], &["possible values: laplacian, depth, both"]);
+    assert_fails(&d, &["--borders", "edges"], &["possible values: laplacian, map-space, both"]);
 }
 
 /// A scene file's `[indirect]` table asks for VPLs: they are simulated (rays under the reference
@@ -588,4 +588,24 @@ fn bench_orbit_writes_frame_times_along_the_path() {
     // The reference draws no maps at all.
     assert!(csv.lines().filter(|l| l.contains(",rt,")).all(|l| l.ends_with(",0")), "{csv}");
     assert!(!std::path::Path::new(out).join("tables.md").exists());
+}
+
+/// `docs/cli.md`'s knob table is the one `hyrt::options` makes (flags, values, both presets'
+/// defaults): a knob or default changed in code changes it. `UPDATE_DOCS=1` rewrites it.
+#[test]
+fn knob_table_in_docs_is_current() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/cli.md");
+    let doc = std::fs::read_to_string(&path).unwrap();
+    let (start, end) = ("<!-- knobs: generated -->\n", "<!-- /knobs -->");
+    let a = doc.find(start).expect("the table's start marker") + start.len();
+    let b = doc.find(end).expect("the table's end marker");
+    let table = hyrt::options::markdown_table();
+    if std::env::var_os("UPDATE_DOCS").is_some() {
+        std::fs::write(&path, format!("{}{table}{}", &doc[..a], &doc[b..])).unwrap();
+        return;
+    }
+    assert!(
+        doc[a..b] == table,
+        "docs/cli.md's knob table is stale: UPDATE_DOCS=1 cargo test --release --test cli knob_table"
+    );
 }

@@ -354,7 +354,7 @@ fn border_methods_are_knobs() {
         o.shadow.borders = b;
         render(&s, o).stats.lights.iter().map(|l| l.undecided).sum::<u64>()
     };
-    let (lap, depth, both) = (rays(Borders::Laplacian), rays(Borders::Depth), rays(Borders::Both));
+    let (lap, depth, both) = (rays(Borders::Laplacian), rays(Borders::MapSpace), rays(Borders::Both));
     assert!(lap > 0 && depth > 0);
     assert!(both >= lap.max(depth), "laplacian {lap}, depth {depth}, both {both}");
 }

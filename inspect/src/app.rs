@@ -10,9 +10,10 @@ use eframe::egui::{
     TextureOptions, Vec2,
 };
 use glam::Vec3 as V3;
+use hyrt::options::{Choice, Indirect, IndirectOptions, Options, Shadows};
 use hyrt::plan::FrameDecision;
 use hyrt::render::{
-    Borders, Indirect, MirrorShadows, Options, Pass, Shadows, Visibility,
+    Pass,
     shadows::{RAY_HINT, RAY_TRAVERSAL},
 };
 use hyrt_shadowmap::{LightMap, MapKind};
@@ -271,7 +272,12 @@ impl Inspector {
             return;
         }
         egui::Panel::left("knobs").default_size(250.0).show(ui, |ui| {
-            egui::ScrollArea::vertical().show(ui, |ui| self.knobs(ui));
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                self.camera_panel(ui);
+                ui.add_space(8.0);
+                ui.separator();
+                self.knobs(ui);
+            });
         });
         egui::Panel::right("details").default_size(360.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.details(ui));
@@ -509,46 +515,23 @@ impl Inspector {
             let o = &mut self.options;
             ui.add_space(4.0);
             ui.label(RichText::new("Visibility and shadows").strong());
-            combo(
-                ui,
-                "visibility",
-                &mut o.visibility,
-                &[(Visibility::Rays, "rays"), (Visibility::Raster, "raster")],
-            );
-            combo(
-                ui,
-                "shadows",
-                &mut o.shadows,
-                &[(Shadows::Rays, "rays"), (Shadows::Maps, "maps"), (Shadows::Smerts, "smerts")],
-            );
+            combo(ui, "visibility", &mut o.visibility);
+            combo(ui, "shadows", &mut o.shadows);
             let maps = o.shadows != Shadows::Rays;
             ui.add_enabled_ui(maps, |ui| {
                 let sh = &mut o.shadow;
-                combo(
-                    ui,
-                    "map kind",
-                    &mut sh.map.kind,
-                    &[(MapKind::Cube, "cube"), (MapKind::Paraboloid, "paraboloid")],
-                );
+                combo(ui, "map kind", &mut sh.map.kind);
                 resolution_combo(ui, "map resolution", &mut sh.map.resolution);
                 ui.add(egui::Slider::new(&mut sh.bias, 0.0..=4.0).text("bias (texels)"));
                 ui.add_enabled_ui(o.shadows == Shadows::Smerts, |ui| {
-                    combo(
-                        ui,
-                        "borders",
-                        &mut sh.borders,
-                        &[
-                            (Borders::Laplacian, "laplacian"),
-                            (Borders::Depth, "depth"),
-                            (Borders::Both, "both"),
-                        ],
-                    );
+                    combo(ui, "borders", &mut sh.borders);
                     ui.add(egui::Slider::new(&mut sh.dilate, 0..=4).text("dilation (px)"));
                 });
                 ui.add_enabled_ui(sh.map.kind == MapKind::Paraboloid, |ui| {
                     let mut tess = sh.map.tess_texels.is_finite();
                     if ui.checkbox(&mut tess, "tessellate").changed() {
-                        sh.map.tess_texels = if tess { 8.0 } else { f32::INFINITY };
+                        sh.map.tess_texels =
+                            if tess { hyrt_shadowmap::MapOptions::default().tess_texels } else { f32::INFINITY };
                     }
                     if tess {
                         ui.add(
@@ -558,29 +541,39 @@ impl Inspector {
                         );
                     }
                 });
-                combo(
-                    ui,
-                    "mirror shadows",
-                    &mut sh.mirror,
-                    &[(MirrorShadows::Maps, "maps"), (MirrorShadows::Rays, "rays")],
-                );
+                combo(ui, "mirror shadows", &mut sh.mirror);
                 ui.checkbox(&mut o.check_visibility, "check visibility (a ray per map decision)")
                     .on_hover_text("Renders one more frame that also casts a shadow ray for every map decision and counts those it contradicts; the time shown is that of a frame without the check.");
             });
             ui.add_space(6.0);
             ui.label(RichText::new("Indirect light (VPLs)").strong());
-            combo(
-                ui,
-                "indirect",
-                &mut o.indirect,
-                &[(Indirect::None, "none"), (Indirect::Rays, "rays"), (Indirect::Maps, "maps")],
-            );
+            combo(ui, "indirect", &mut o.indirect);
             ui.add_enabled_ui(o.indirect != Indirect::None, |ui| {
                 let io = &mut o.indirect_opts;
                 ui.add(egui::Slider::new(&mut io.vpl.paths, 0..=256).text("VPL paths"));
                 ui.add(egui::Slider::new(&mut io.vpl.bounces, 1..=4).text("VPL bounces"));
+                ui.add(egui::DragValue::new(&mut io.vpl.seed).prefix("VPL seed "));
+                ui.add(
+                    egui::Slider::new(&mut io.clamp, 0.0..=0.1)
+                        .logarithmic(true)
+                        .text("VPL clamp (of the diagonal)"),
+                );
                 ui.add_enabled_ui(o.indirect == Indirect::Maps, |ui| {
                     resolution_combo(ui, "VPL map resolution", &mut io.map.resolution);
+                    combo(ui, "VPL map format", &mut io.format);
+                    combo(ui, "VPL filter", &mut io.filter);
+                    ui.add(egui::Slider::new(&mut io.bias, 0.0..=4.0).text("VPL bias (texels)"));
+                    let mut tess = io.map.tess_texels.is_finite();
+                    if ui.checkbox(&mut tess, "tessellate VPL maps").changed() {
+                        io.map.tess_texels = if tess { IndirectOptions::default().map.tess_texels } else { f32::INFINITY };
+                    }
+                    if tess {
+                        ui.add(
+                            egui::Slider::new(&mut io.map.tess_texels, 1.0..=64.0)
+                                .logarithmic(true)
+                                .text("VPL tessellation (texels)"),
+                        );
+                    }
                 });
                 ui.add(egui::Slider::new(&mut io.interleave, 1..=8).text("interleave"));
             });
@@ -609,9 +602,6 @@ impl Inspector {
                 self.ms(r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0)),
             ));
         }
-        ui.add_space(8.0);
-        ui.separator();
-        self.camera_panel(ui);
     }
 
     /// The camera (position, reset, copy as TOML), the reference's schedule, and the lights.
@@ -1781,12 +1771,11 @@ fn decision_row(ui: &mut egui::Ui, run: bool, what: &str, reason: &str) {
     });
 }
 
-/// A generic combo box over labelled values.
-fn combo<T: PartialEq + Copy>(ui: &mut egui::Ui, label: &str, value: &mut T, choices: &[(T, &str)]) {
-    let current = choices.iter().find(|(v, _)| v == value).map_or("?", |(_, n)| n);
-    egui::ComboBox::from_label(label).selected_text(current).show_ui(ui, |ui| {
-        for (v, name) in choices {
-            ui.selectable_value(value, *v, *name);
+/// A combo box over every value of an enum knob, by its names ([`Choice`]).
+fn combo<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
+    egui::ComboBox::from_label(label).selected_text(value.name()).show_ui(ui, |ui| {
+        for v in T::ALL {
+            ui.selectable_value(value, *v, v.name());
         }
     });
 }

@@ -254,7 +254,7 @@ impl Worker {
 pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
     let scene = hyrt::cli::load_scene(&setup.scene, setup.size, setup.max_depth, None)?;
     let mut knobs = setup.knobs.clone();
-    knobs.preset = knobs.preset.or(Some(hyrt::cli::PresetArg::Hybrid));
+    knobs.preset = knobs.preset.or(Some(hyrt::options::Preset::Hybrid));
     let mut options = match setup.options {
         Some(o) => o,
         None => knobs.options_for(&scene)?,

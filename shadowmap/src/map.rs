@@ -118,6 +118,16 @@ pub enum MapKind {
     Paraboloid,
 }
 
+impl MapKind {
+    /// The kind's name on the command line and in statistics.
+    pub const fn name(self) -> &'static str {
+        match self {
+            MapKind::Cube => "cube",
+            MapKind::Paraboloid => "paraboloid",
+        }
+    }
+}
+
 /// How to build a map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapOptions {

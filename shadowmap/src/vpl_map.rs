@@ -111,7 +111,8 @@ impl VplFormat {
         }
     }
 
-    pub fn name(self) -> &'static str {
+    /// The format's name on the command line and in statistics.
+    pub const fn name(self) -> &'static str {
         match self {
             VplFormat::Planes => "planes",
             VplFormat::Depth16 => "depth16",

@@ -10,10 +10,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::Vec3;
-use hyrt_shadowmap::{
-    MapOptions,
-    vpl_map::{VplFormat, VplMap},
-};
+use hyrt_shadowmap::vpl_map::VplMap;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
@@ -22,66 +19,7 @@ use crate::plan::FrameDecision;
 use super::gather::{self, Points, ShadePoint, Sums, VplConsts};
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
 
-/// The knobs of indirect light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct IndirectOptions {
-    pub vpl: vpl::VplOptions,
-    /// `d_min` of the `1 / max(d^2, d_min^2)` clamp, as a fraction of the scene's bounding-box
-    /// diagonal (so the same value suits scenes in millimetres and in metres).
-    pub clamp: f32,
-    /// The VPL maps (one paraboloid hemisphere each; `kind` is ignored).
-    pub map: MapOptions,
-    /// Depth margin of map lookups, in texel footprints (as for the light maps).
-    pub bias: f32,
-    /// Interleaved sampling: each pixel of a `k x k` pattern evaluates a `1 / k^2` subset of
-    /// the VPLs, then a geometry-aware filter reconstructs (see [`run`]); 1 = off.
-    pub interleave: u32,
-    /// How a VPL map decides visibility: the texel under the point (the thesis), or the 2x2
-    /// texels around it, bilinearly weighted.
-    pub filter: VplFilter,
-    /// What a VPL map's texels hold: occluder planes or 16-bit depths ([`VplMap`]).
-    pub format: VplFormat,
-}
-
-/// [`IndirectOptions::filter`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum VplFilter {
-    /// The texel under the point decides: visible or not.
-    #[default]
-    Texel,
-    /// Percentage-closer filtering over the 2x2 texels around the point: a fraction.
-    Bilinear,
-}
-
-impl VplFilter {
-    pub fn name(self) -> &'static str {
-        match self {
-            VplFilter::Texel => "texel",
-            VplFilter::Bilinear => "bilinear",
-        }
-    }
-}
-
-/// Defaults chosen by measuring the thesis scenes with 45 VPLs, maps against rays on the full
-/// image (the sweeps under `docs/sweeps/*-vpl-maps`): 16-bit depths are as accurate as planes
-/// at the same resolution, in a sixth of the memory, so the default is depths at 512x512
-/// (0.5 MB per VPL), which keep the Cornell box and the conference room above 40 dB; the
-/// office stays below it at any size that fits 1 MB (its blinds' shadows need about 1500
-/// texels a side). The tessellation only has to keep the ids right, not the depths (which
-/// come from the planes): 32 texels costs no accuracy at 512 and saves a third of the build.
-impl Default for IndirectOptions {
-    fn default() -> Self {
-        Self {
-            vpl: vpl::VplOptions::default(),
-            clamp: 0.01,
-            map: MapOptions { resolution: 512, tess_texels: 32.0, ..MapOptions::default() },
-            bias: 0.5,
-            interleave: 1,
-            filter: VplFilter::default(),
-            format: VplFormat::default(),
-        }
-    }
-}
+pub use crate::options::{IndirectOptions, VplFilter};
 
 /// Per-renderer VPLs and VPL maps.
 #[derive(Default)]

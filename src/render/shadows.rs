@@ -575,7 +575,7 @@ impl Renderer<'_> {
         // The Laplacian on a binary map is non-zero exactly where a 4-neighbour with a decision
         // has the other one (`hyrt_shadowmap::border`); the map-space bits are already limited
         // to pixels with a decision.
-        let laplacian = opts.borders != Borders::Depth;
+        let laplacian = opts.borders != Borders::MapSpace;
         let map_space = opts.borders != Borders::Laplacian;
         und.par_chunks_mut((w * stride).max(1)).enumerate().for_each(|(y, row)| {
             for x in 0..w {

@@ -1,22 +1,15 @@
 //! hyrt: a hybrid CPU renderer.
 //!
-//! The library behind the `hyrt` CLI: scene model and loaders ([`scene`]), the effect
-//! planner ([`plan`]), the one pipeline with per-stage strategies ([`render`]), film output
-//! ([`film`]), image metrics ([`metrics`]), and measurement ([`measure`]) with sweeps over the
-//! knobs ([`sweep`], plotted by [`plot`]).
+//! The library behind the `hyrt` command line (`cli/`) and the inspector (`inspect/`): scene
+//! model and loaders ([`scene`]), every strategy and knob ([`options`]), the effect planner
+//! ([`plan`]), the one pipeline with per-stage strategies ([`render`]), film output ([`film`],
+//! [`output`]) and image metrics ([`metrics`]).
 
-pub mod bench;
 pub mod camera;
-pub mod cli;
 pub mod film;
-pub mod measure;
 pub mod metrics;
 pub mod options;
-pub mod orbit;
 pub mod output;
 pub mod plan;
-pub mod plot;
 pub mod render;
 pub mod scene;
-pub mod stats;
-pub mod sweep;

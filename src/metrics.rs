@@ -99,29 +99,91 @@ impl DisplayImage {
     }
 }
 
-/// Mean FLIP error of `test` against `reference` (NVIDIA's perceptual difference of LDR
-/// images: 0 where identical, up to 1; lower is better), both as displayed and quantised to
-/// 8-bit sRGB like our PNGs, under FLIP's default viewing conditions (67 pixels per degree).
-pub fn flip_mean(reference: &DisplayImage, test: &DisplayImage) -> Result<f64> {
-    if (reference.width, reference.height) != (test.width, test.height) {
-        bail!(
-            "images differ in size: {}x{} vs {}x{}",
-            reference.width,
-            reference.height,
-            test.width,
-            test.height
-        );
+/// Median, mean, minimum and maximum of repeated timings, in milliseconds: the one summary of
+/// samples that the benchmarks, sweeps and tools use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Timing {
+    pub runs: usize,
+    pub median: f64,
+    pub mean: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Timing {
+    /// Summary of `samples` (all zero if empty). The median of an even count is the mean of
+    /// the two middle samples.
+    pub fn of(samples: &[f64]) -> Self {
+        if samples.is_empty() {
+            return Self::default();
+        }
+        let mut s = samples.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
+        Self { runs: n, median, mean: s.iter().sum::<f64>() / n as f64, min: s[0], max: s[n - 1] }
     }
-    let flip_image = |img: &DisplayImage| {
-        let bytes: Vec<u8> = img
-            .pixels
-            .iter()
-            .flat_map(|p| p.to_array())
-            .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-            .collect();
-        nv_flip::FlipImageRgb8::with_data(img.width, img.height, &bytes)
-    };
-    let map = nv_flip::flip(flip_image(reference), flip_image(test), nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    let v = map.to_vec();
-    Ok(v.iter().map(|&e| f64::from(e)).sum::<f64>() / v.len().max(1) as f64)
+
+    /// Frames per second as the thesis reports them: frames over total time (1000 / mean ms).
+    pub fn fps_mean(&self) -> f64 {
+        if self.mean > 0.0 { 1e3 / self.mean } else { 0.0 }
+    }
+}
+
+/// The `p`-th percentile of `samples` by nearest rank (0 if empty).
+pub fn percentile(samples: &[f64], p: f64) -> f64 {
+    let mut s = samples.to_vec();
+    s.sort_by(f64::total_cmp);
+    if s.is_empty() {
+        return 0.0;
+    }
+    let k = ((p / 100.0) * s.len() as f64).ceil().max(1.0) as usize - 1;
+    s[k.min(s.len() - 1)]
+}
+
+/// PSNR (dB, display luminance at the scene's exposure) of `film` against `reference`.
+pub fn psnr(
+    scene: &crate::scene::Scene,
+    reference: &crate::film::Film,
+    film: &crate::film::Film,
+) -> Result<f64> {
+    let e = scene.settings.exposure;
+    let c = compare(&DisplayImage::from_film(reference, e), &DisplayImage::from_film(film, e))?;
+    Ok(c.psnr_db)
+}
+
+/// Wrong-visibility counts of map-based shadows with `options`: (pixel, light) pairs whose
+/// decision (by the map, a hint or a traversal) a plain shadow ray contradicts, and distinct
+/// pixels with at least one such light.
+pub fn wrong_visibility(scene: &crate::scene::Scene, mut options: crate::options::Options) -> (u64, u64) {
+    options.check_visibility = true;
+    options.keep_buffers = true;
+    let f = crate::render::Renderer::new(scene, options).render(&|| {});
+    let pairs = f.stats.lights.iter().filter_map(|l| l.wrong_total()).sum();
+    let pixels = f.shadows.as_ref().map_or(0, |b| {
+        let n = f.film.pixels.len();
+        (0..n).filter(|&i| b.wrong.iter().any(|w| w.get(i).copied().unwrap_or(false))).count() as u64
+    });
+    (pairs, pixels)
+}
+
+#[cfg(test)]
+mod timing_tests {
+    use super::*;
+
+    #[test]
+    fn timing_summarises() {
+        let t = Timing::of(&[4.0, 1.0, 3.0, 2.0]);
+        assert_eq!((t.runs, t.median, t.mean, t.min, t.max), (4, 2.5, 2.5, 1.0, 4.0));
+        assert_eq!(Timing::of(&[5.0, 1.0, 9.0]).median, 5.0);
+        assert_eq!(Timing::of(&[]).runs, 0);
+        assert_eq!(Timing::of(&[2.0, 2.0]).fps_mean(), 500.0);
+    }
+
+    #[test]
+    fn percentiles_by_nearest_rank() {
+        let v = [5.0, 1.0, 4.0, 2.0, 3.0];
+        assert_eq!((percentile(&v, 5.0), percentile(&v, 50.0), percentile(&v, 95.0)), (1.0, 3.0, 5.0));
+        assert_eq!(percentile(&[], 50.0), 0.0);
+    }
 }

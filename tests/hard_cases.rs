@@ -285,7 +285,7 @@ fn tiny_and_huge_scales_give_the_same_image() {
         assert!(moved <= bound, "scale {k}: the reference differs on {moved} px");
         let moved = differing(&hyb1, &shot(&scene, Options::hybrid()));
         assert!(moved <= bound, "scale {k}: the hybrid differs on {moved} px");
-        let (_, wrong_px) = hyrt::measure::wrong_visibility(&scene, Options::hybrid());
+        let (_, wrong_px) = hyrt::metrics::wrong_visibility(&scene, Options::hybrid());
         assert!(wrong_px as usize <= bound, "scale {k}: {wrong_px} wrong pixels");
     }
 }

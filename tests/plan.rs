@@ -68,7 +68,7 @@ fn vpls_only_when_asked() {
 
     let mut asked = plain.clone();
     asked.indirect = Some(IndirectSettings { vpls: 6, bounces: 1, seed: 0, clamp: None });
-    let knobs = hyrt::cli::Knobs::from_flags(&["--preset", "hybrid"]).unwrap();
+    let knobs = hyrt::options::Knobs::from_flags(&["--preset", "hybrid"]).unwrap();
     let opts = knobs.options_for(&asked).unwrap();
     assert_eq!(opts.indirect, Indirect::Maps);
     let r = Renderer::new(&asked, opts);

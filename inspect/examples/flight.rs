@@ -62,7 +62,7 @@ fn main() -> anyhow::Result<()> {
     // The graph keeps repainting while moving: a few steps, not `run` (which waits for rest).
     h.run_steps(3);
     h.render().map_err(anyhow::Error::msg)?.save(&out)?;
-    let median = |v: &[f64]| hyrt::measure::Timing::of(v).median;
+    let median = |v: &[f64]| hyrt::metrics::Timing::of(v).median;
     println!(
         "{out}: {steps} moving frames, median {:.1} ms per command ({:.1} ms the hybrid frame)",
         median(&wall),

@@ -1,7 +1,7 @@
 //! `hyrt-inspect [SCENE] [--size WxH] [--max-depth N] [render flags]`: the inspector window.
 
 use clap::Parser;
-use hyrt::cli::{Knobs, parse_size};
+use hyrt::options::{Knobs, parse_size};
 use hyrt_inspect::{Inspector, Setup};
 
 /// hyrt-inspect: see why the hybrid renderer is fast and where it is wrong.

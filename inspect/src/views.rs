@@ -370,7 +370,7 @@ mod tests {
         let mse = e.iter().map(|&v| f64::from(v) * f64::from(v)).sum::<f64>() / 4.0;
         let mut scene = hyrt::scene::Scene::default();
         scene.settings.exposure = 1.0;
-        let psnr = hyrt::measure::psnr(&scene, &a, &b).expect("same size");
+        let psnr = hyrt::metrics::psnr(&scene, &a, &b).expect("same size");
         assert!((10.0 * (1.0 / mse).log10() - psnr).abs() < 1e-4, "{psnr}");
     }
 

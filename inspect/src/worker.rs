@@ -45,7 +45,7 @@ pub struct Setup {
     pub size: Option<(u32, u32)>,
     pub max_depth: Option<u32>,
     /// The render flags (a missing `--preset` means the hybrid one here).
-    pub knobs: hyrt::cli::Knobs,
+    pub knobs: hyrt::options::Knobs,
     /// Override of the knobs' options (tests set small maps this way).
     pub options: Option<Options>,
 }
@@ -252,7 +252,8 @@ impl Worker {
 
 /// Loads the scene with the setup's size and depth overrides, validated, and the options.
 pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
-    let scene = hyrt::cli::load_scene(&setup.scene, setup.size, setup.max_depth, None)?;
+    let overrides = hyrt::scene::Overrides { size: setup.size, max_depth: setup.max_depth, exposure: None };
+    let scene = hyrt::scene::load_with(&setup.scene, overrides)?;
     let mut knobs = setup.knobs.clone();
     knobs.preset = knobs.preset.or(Some(hyrt::options::Preset::Hybrid));
     let mut options = match setup.options {
@@ -580,7 +581,7 @@ fn ticker<'p>(progress: &'p Progress, h: u32, notify: &'p (dyn Fn() + Send + Syn
 fn comparison(reference: Arc<Reference>, rendered: bool, film: &Film, scene: &Scene) -> Comparison {
     let (w, h) = (film.width, film.height);
     let error = views::luminance_error(film, &reference.film, scene.settings.exposure);
-    let psnr = hyrt::measure::psnr(scene, &reference.film, film).unwrap_or(f64::NAN);
+    let psnr = hyrt::metrics::psnr(scene, &reference.film, film).unwrap_or(f64::NAN);
     let error_heat = views::error_heat(&error, w, h);
     Comparison { reference, rendered, psnr, error, error_heat }
 }

@@ -329,6 +329,28 @@ pub fn load(spec: &str) -> Result<Scene> {
     Ok(scene)
 }
 
+/// A scene's render settings overridden by a caller (the command line, the inspector).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// Image width and height.
+    pub size: Option<(u32, u32)>,
+    pub max_depth: Option<u32>,
+    pub exposure: Option<f32>,
+}
+
+/// [`load`], with some render settings overridden, validated again with them.
+pub fn load_with(spec: &str, o: Overrides) -> Result<Scene> {
+    let mut scene = load(spec)?;
+    let s = &mut scene.settings;
+    if let Some((w, h)) = o.size {
+        (s.width, s.height) = (w, h);
+    }
+    s.max_depth = o.max_depth.unwrap_or(s.max_depth);
+    s.exposure = o.exposure.unwrap_or(s.exposure);
+    scene.validate()?;
+    Ok(scene)
+}
+
 impl Scene {
     /// The materials that at least one triangle uses, in material order.
     pub fn materials_in_use(&self) -> Vec<&Material> {

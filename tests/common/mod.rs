@@ -9,9 +9,11 @@ use hyrt::{
     scene::{Camera, Material, PointLight, Scene, Settings},
 };
 
-/// The project root (where `Cargo.toml` is).
+/// The project root (the workspace's, where `Cargo.lock` is), also from the tests of a
+/// member package that include this module.
 pub fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    here.ancestors().find(|d| d.join("Cargo.lock").exists()).unwrap_or(here).to_path_buf()
 }
 
 /// A path under `../shared/scenes`.
@@ -60,24 +62,6 @@ pub fn floor_scene(
     s.settings = Settings { width: w, height: h, max_depth: 5, exposure: 1.0 };
     s.validate().expect("valid test scene");
     s
-}
-
-/// Runs the `hyrt` binary with arguments; returns (success, stdout, stderr).
-pub fn hyrt(args: &[&str]) -> (bool, String, String) {
-    hyrt_in(&root(), args)
-}
-
-pub fn hyrt_in(dir: &Path, args: &[&str]) -> (bool, String, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hyrt"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run hyrt");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
 }
 
 /// An axis-aligned closed box (12 triangles, outward faces).

@@ -594,7 +594,7 @@ fn bench_orbit_writes_frame_times_along_the_path() {
 /// defaults): a knob or default changed in code changes it. `UPDATE_DOCS=1` rewrites it.
 #[test]
 fn knob_table_in_docs_is_current() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/cli.md");
+    let path = root().join("docs/cli.md");
     let doc = std::fs::read_to_string(&path).unwrap();
     let (start, end) = ("<!-- knobs: generated -->\n", "<!-- /knobs -->");
     let a = doc.find(start).expect("the table's start marker") + start.len();
@@ -606,6 +606,6 @@ fn knob_table_in_docs_is_current() {
     }
     assert!(
         doc[a..b] == table,
-        "docs/cli.md's knob table is stale: UPDATE_DOCS=1 cargo test --release --test cli knob_table"
+        "docs/cli.md's knob table is stale: UPDATE_DOCS=1 cargo test --release -p hyrt-cli --test cli knob_table"
     );
 }

@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use crate::{plan::Plan, render::FrameStats, scene::Scene};
+use hyrt::{plan::Plan, render::FrameStats, scene::Scene};
 
 /// What one render did: scene, plan, rays by kind, time by pass.
 #[derive(Serialize)]
@@ -23,10 +23,10 @@ pub struct RenderStats<'a> {
     /// Per light, with map-based shadows: camera hits the map decided lit / shadowed, those
     /// left undecided (given a shadow ray), map faces drawn, and with `--check-visibility` the
     /// map decisions a shadow ray contradicts (`wrong`).
-    pub shadow_lights: Vec<crate::render::shadows::LightStats>,
+    pub shadow_lights: Vec<hyrt::render::shadows::LightStats>,
     /// What the frame rebuilt or reused (BVH, light maps, VPLs), and per light whether it
     /// needed a map and rays at all.
-    pub frame_decisions: Vec<crate::plan::FrameDecision>,
+    pub frame_decisions: Vec<hyrt::plan::FrameDecision>,
     /// Light maps built for this frame (0: all cached).
     pub maps_built: u32,
     /// With indirect light: the VPLs and the memory of their maps.

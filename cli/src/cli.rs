@@ -8,12 +8,13 @@ use std::{
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use crate::{
+use hyrt::{
     metrics, output,
     render::{Renderer, Visibility},
     scene,
-    stats::RenderStats,
 };
+
+use crate::stats::RenderStats;
 
 /// hyrt: a hybrid CPU renderer (rasterization + selective ray tracing).
 #[derive(Parser, Debug)]
@@ -74,7 +75,7 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-pub use crate::options::{Knobs, parse_size};
+pub use hyrt::options::{Knobs, parse_size};
 
 #[derive(Args, Debug)]
 pub struct PlanArgs {
@@ -122,15 +123,7 @@ pub fn load_scene(
     max_depth: Option<u32>,
     exposure: Option<f32>,
 ) -> Result<scene::Scene> {
-    let mut scene = scene::load(name)?;
-    let s = &mut scene.settings;
-    if let Some((w, h)) = size {
-        (s.width, s.height) = (w, h);
-    }
-    s.max_depth = max_depth.unwrap_or(s.max_depth);
-    s.exposure = exposure.unwrap_or(s.exposure);
-    scene.validate()?;
-    Ok(scene)
+    scene::load_with(name, scene::Overrides { size, max_depth, exposure })
 }
 
 /// Runs the CLI on parsed arguments.
@@ -198,7 +191,7 @@ fn render(a: &RenderArgs) -> Result<()> {
     let frame = renderer.render(&|| bar.inc(1));
     bar.finish_and_clear();
 
-    say(format!("this frame:\n{}", crate::plan::format_decisions(&frame.stats.decisions).trim_end()));
+    say(format!("this frame:\n{}", hyrt::plan::format_decisions(&frame.stats.decisions).trim_end()));
     let r = &frame.stats.rays;
     let times: Vec<String> = frame.stats.time_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
     say(format!(
@@ -234,7 +227,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         staged.push(output::stage(p, |tmp| frame.film.save_exr(tmp))?);
     }
     if let Some(p) = &a.stats {
-        let opts = crate::options::to_json(&options, scene.settings.max_depth);
+        let opts = hyrt::options::to_json(&options, scene.settings.max_depth);
         let mut stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, renderer.bvh_build_ms());
         if options.visibility == Visibility::Raster {
             stats = stats.with_raster(renderer.raster_stats());
@@ -277,7 +270,7 @@ fn plan(a: &PlanArgs) -> Result<()> {
     let scene = load_scene(&a.scene, a.size, a.max_depth, None)?;
     let options = a.knobs.options_for(&scene)?;
     if !a.frames {
-        let plan = crate::plan::Plan::new(&scene, &options);
+        let plan = hyrt::plan::Plan::new(&scene, &options);
         if a.json {
             println!("{}", serde_json::to_string_pretty(&plan)?);
         } else {
@@ -300,9 +293,9 @@ fn plan(a: &PlanArgs) -> Result<()> {
             renderer.render(&|| {}).stats
         })
         .collect();
-    let passes = |s: &crate::render::FrameStats| {
+    let passes = |s: &hyrt::render::FrameStats| {
         let mut p: Vec<&str> = s.time_ms.keys().copied().filter(|k| *k != "total").collect();
-        p.sort_by_key(|n| crate::render::Pass::rank(n));
+        p.sort_by_key(|n| hyrt::render::Pass::rank(n));
         p
     };
     if a.json {
@@ -330,7 +323,7 @@ fn plan(a: &PlanArgs) -> Result<()> {
         let r = &s.rays;
         println!("frame {} (eye {}):", i + 1, vec3_text(c.eye));
         println!("  passes run: {}", passes(s).join(", "));
-        print!("{}", crate::plan::format_decisions(&s.decisions));
+        print!("{}", hyrt::plan::format_decisions(&s.decisions));
         println!(
             "  rays: primary {} shadow {} specular {} vpl_shadow {} vpl_path {}; light maps built {}",
             r.primary, r.shadow, r.specular, r.vpl_shadow, r.vpl_path, s.maps_built

@@ -18,7 +18,7 @@
 //! alive at once; so compare two combinations by their speed-ups rather than their times.
 //!
 //! Error: PSNR of display luminance ([`crate::measure::psnr`]), the mean FLIP error
-//! ([`crate::metrics::flip_mean`]), and wrong-visibility pixels and (pixel, light) pairs. The
+//! ([`hyrt::metrics::flip_mean`]), and wrong-visibility pixels and (pixel, light) pairs. The
 //! Pareto front ([`crate::plot::pareto_front`]) is over (median frame ms, PSNR), both rounded to
 //! the 3 decimals the CSV shows, so it can be recomputed from the CSV exactly.
 //!
@@ -35,15 +35,19 @@ use std::{
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 
-use crate::{
-    cli::{Knobs, parse_size},
+use hyrt::{
     film::Film,
-    measure::{Config, MeasureOptions, Measurement, measure},
-    metrics::{DisplayImage, flip_mean},
+    metrics::DisplayImage,
+    options::{Knobs, parse_size},
     output::atomic_write,
-    plot,
     render::{Indirect, Options, Shadows},
     scene::Scene,
+};
+
+use crate::{
+    flip::flip_mean,
+    measure::{Config, MeasureOptions, Measurement, measure},
+    plot,
 };
 
 /// `hyrt sweep` arguments.
@@ -620,7 +624,7 @@ fn json(ctx: &Sweep, reference: &Row, rows: &[Row]) -> Result<serde_json::Value>
             "label": r.label,
             "knobs": knobs,
             "flags": r.flags,
-            "options": crate::options::to_json(&r.options, max_depth),
+            "options": hyrt::options::to_json(&r.options, max_depth),
             "measurement": measurement_json(&r.m)?,
             "reference_ms_side_by_side": r.ref_ms,
             "speedup_vs_reference": r.speedup,

@@ -13,13 +13,15 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use glam::{Quat, Vec3};
 
-use crate::{
-    bench::BenchArgs,
-    cli::Knobs,
+use hyrt::{
+    metrics::percentile,
+    options::Knobs,
     output::atomic_write,
     render::Renderer,
     scene::{Camera, Scene},
 };
+
+use crate::bench::BenchArgs;
 
 /// Half the arc the camera swings through, in degrees.
 pub const ARC_DEG: f32 = 20.0;
@@ -45,17 +47,6 @@ struct Track {
     ms: Vec<f64>,
     /// Light-map faces drawn in each frame after the first.
     faces: Vec<u32>,
-}
-
-/// The `p`-th percentile (nearest rank) of `v`.
-fn percentile(v: &[f64], p: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    if s.is_empty() {
-        return 0.0;
-    }
-    let k = ((p / 100.0) * s.len() as f64).ceil().max(1.0) as usize - 1;
-    s[k.min(s.len() - 1)]
 }
 
 /// Faces rasterized so far over every light's map.

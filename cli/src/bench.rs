@@ -22,11 +22,9 @@ use std::{fmt::Write as _, io::IsTerminal, path::PathBuf};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use crate::{
-    cli::Knobs,
-    measure::{self, Config, MeasureOptions, Measurement},
-    output::atomic_write,
-};
+use hyrt::{options::Knobs, output::atomic_write};
+
+use crate::measure::{self, Config, MeasureOptions, Measurement};
 
 /// Arguments of `hyrt bench`.
 #[derive(clap::Args, Debug)]
@@ -201,7 +199,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
         for m in &mut ms {
             let reference = if cs
                 .iter()
-                .any(|c| c.label == m.label && c.options.indirect != crate::render::Indirect::None)
+                .any(|c| c.label == m.label && c.options.indirect != hyrt::render::Indirect::None)
             {
                 &rt_vpl
             } else {
@@ -463,7 +461,7 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     // (`Pass::ALL`); `vis_*` are the parts of `visibility`.
     let mut passes: Vec<&str> =
         results.iter().flat_map(|r| &r.configs).flat_map(|m| m.pass_ms.keys()).map(String::as_str).collect();
-    passes.sort_by_key(|k| (crate::render::Pass::rank(k), *k));
+    passes.sort_by_key(|k| (hyrt::render::Pass::rank(k), *k));
     passes.dedup();
     let _ = writeln!(
         s,

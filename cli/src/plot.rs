@@ -17,7 +17,7 @@ use plotters::{
     prelude::*,
 };
 
-use crate::output::atomic_write;
+use hyrt::output::atomic_write;
 
 /// Which points are on the Pareto front of `points` = `(time, quality)`: lower time and higher
 /// quality are better, and a point is on the front when no other point is at least as good in

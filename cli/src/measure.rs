@@ -7,7 +7,7 @@
 //! (`first_frame_ms`, `map_build_ms`) because a second frame of an unchanged scene reuses them.
 //!
 //! Accuracy is measured against a reference film: PSNR of display luminance
-//! ([`crate::metrics`]), and for map-based shadows the wrong-visibility pixels, from one more
+//! ([`hyrt::metrics`]), and for map-based shadows the wrong-visibility pixels, from one more
 //! frame rendered with `check_visibility` (a shadow ray per map decision; not timed).
 
 use std::collections::BTreeMap;
@@ -15,42 +15,12 @@ use std::collections::BTreeMap;
 use hyrt_tracer::RayCounts;
 use serde::Serialize;
 
-use crate::{
+pub use hyrt::metrics::{Timing, psnr, wrong_visibility};
+use hyrt::{
     film::Film,
-    metrics::{self, DisplayImage},
     render::{Options, Renderer, Shadows},
     scene::Scene,
 };
-
-/// Median, mean, minimum and maximum of repeated timings, in milliseconds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct Timing {
-    pub runs: usize,
-    pub median: f64,
-    pub mean: f64,
-    pub min: f64,
-    pub max: f64,
-}
-
-impl Timing {
-    /// Summary of `samples` (all zero if empty). The median of an even count is the mean of
-    /// the two middle samples.
-    pub fn of(samples: &[f64]) -> Self {
-        if samples.is_empty() {
-            return Self::default();
-        }
-        let mut s = samples.to_vec();
-        s.sort_by(f64::total_cmp);
-        let n = s.len();
-        let median = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
-        Self { runs: n, median, mean: s.iter().sum::<f64>() / n as f64, min: s[0], max: s[n - 1] }
-    }
-
-    /// Frames per second as the thesis reports them: frames over total time (1000 / mean ms).
-    pub fn fps_mean(&self) -> f64 {
-        if self.mean > 0.0 { 1e3 / self.mean } else { 0.0 }
-    }
-}
 
 /// A named configuration to measure.
 #[derive(Clone, Debug)]
@@ -216,55 +186,19 @@ pub fn measure(
     Ok(out)
 }
 
-/// Renders one frame of `scene` with `options` (e.g. the reference) and returns its film.
-pub fn render_film(scene: &Scene, options: Options) -> Film {
-    Renderer::new(scene, options).render(&|| {}).film
-}
-
-/// PSNR (dB, display luminance at the scene's exposure) of `film` against `reference`.
-pub fn psnr(scene: &Scene, reference: &Film, film: &Film) -> anyhow::Result<f64> {
-    let e = scene.settings.exposure;
-    let c = metrics::compare(&DisplayImage::from_film(reference, e), &DisplayImage::from_film(film, e))?;
-    Ok(c.psnr_db)
-}
-
-/// Wrong-visibility counts of map-based shadows with `options`: (pixel, light) pairs whose
-/// decision (by the map, a hint or a traversal) a plain shadow ray contradicts, and distinct
-/// pixels with at least one such light.
-pub fn wrong_visibility(scene: &Scene, mut options: Options) -> (u64, u64) {
-    options.check_visibility = true;
-    options.keep_buffers = true;
-    let f = Renderer::new(scene, options).render(&|| {});
-    let pairs = f.stats.lights.iter().filter_map(|l| l.wrong_total()).sum();
-    let pixels = f.shadows.as_ref().map_or(0, |b| {
-        let n = f.film.pixels.len();
-        (0..n).filter(|&i| b.wrong.iter().any(|w| w.get(i).copied().unwrap_or(false))).count() as u64
-    });
-    (pairs, pixels)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn timing_summarises() {
-        let t = Timing::of(&[4.0, 1.0, 3.0, 2.0]);
-        assert_eq!((t.runs, t.median, t.mean, t.min, t.max), (4, 2.5, 2.5, 1.0, 4.0));
-        assert_eq!(Timing::of(&[5.0, 1.0, 9.0]).median, 5.0);
-        assert_eq!(Timing::of(&[]).runs, 0);
-        assert_eq!(Timing::of(&[2.0, 2.0]).fps_mean(), 500.0);
-    }
 
     /// Alternated frames of two configurations on the built-in scene: every timed frame is
     /// counted, the reference compared with itself is exact, and the hybrid's wrong-visibility
     /// pixels are counted (and no more than its (pixel, light) pairs).
     #[test]
     fn measures_side_by_side() {
-        let mut scene = crate::scene::load("cornell").unwrap();
+        let mut scene = hyrt::scene::load("cornell").unwrap();
         scene.settings.width = 64;
         scene.settings.height = 48;
-        let reference = render_film(&scene, Options::reference());
+        let reference = Renderer::new(&scene, Options::reference()).render(&|| {}).film;
         let configs = [
             Config { label: "reference".into(), options: Options::reference() },
             Config { label: "hybrid".into(), options: Options::hybrid() },

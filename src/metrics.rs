@@ -38,7 +38,8 @@ pub struct Comparison {
     pub differing_pixels: u64,
 }
 
-fn ser_psnr<S: serde::Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
+/// Writes a PSNR for JSON, which has no infinity: `"inf"` for identical images.
+pub fn ser_psnr<S: serde::Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
     if v.is_infinite() { s.serialize_str("inf") } else { s.serialize_f64(*v) }
 }
 

@@ -192,9 +192,10 @@ choice! {
     #[derive(Default)]
     pub enum Preset {
         /// Rays everywhere: the Whitted ground truth.
-        #[default]
         Reference = "reference",
-        /// Raster visibility and SMeRTS with the measured defaults.
+        /// Raster visibility and SMeRTS with the measured defaults: the product, and the
+        /// default.
+        #[default]
         Hybrid = "hybrid",
     }
 }
@@ -274,6 +275,23 @@ impl Options {
     /// The hybrid: rasterized visibility and SMeRTS with the default knobs.
     pub fn hybrid() -> Self {
         Self { visibility: Visibility::Raster, shadows: Shadows::Smerts, ..Self::default() }
+    }
+
+    /// The ground truth these options are measured against: rays everywhere, with the same
+    /// VPLs (by rays, every VPL at every pixel: no interleaving) when these have indirect
+    /// light. The map and VPL-map knobs stay these options' (unused by rays), so that one
+    /// renderer switched between the two keeps its caches.
+    pub fn reference_for(&self) -> Options {
+        let mut r = Options {
+            visibility: Visibility::Rays,
+            shadows: Shadows::Rays,
+            indirect: if self.indirect == Indirect::None { Indirect::None } else { Indirect::Rays },
+            check_visibility: false,
+            keep_buffers: false,
+            ..*self
+        };
+        r.indirect_opts.interleave = 1;
+        r
     }
 }
 

@@ -17,7 +17,7 @@
 //! PSNR is on display luminance against `rt` (direct light) or `rt-vpl` (with indirect light).
 //! Table 4.3 (SMeRTS on the thesis's GPU tracer) has no CPU counterpart and is not reproduced.
 
-use std::{fmt::Write as _, io::IsTerminal, path::PathBuf};
+use std::{fmt::Write as _, path::PathBuf};
 
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -167,16 +167,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create folder", a.out.display()))?;
 
     let frames_per_scene = flags.len() as u64 * (1 + u64::from(a.runs)) + if a.no_check { 0 } else { 3 };
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new(frames_per_scene * loaded.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed} {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = crate::cli::progress_bar(frames_per_scene * loaded.len() as u64, "frames", false);
 
     let mut results = Vec::new();
     for (sc, cs) in loaded.iter().zip(per_scene) {

@@ -14,7 +14,7 @@ use hyrt::{
     scene,
 };
 
-use crate::stats::RenderStats;
+use crate::stats::{RenderStats, VsReference};
 
 /// hyrt: a hybrid CPU renderer (rasterization + selective ray tracing).
 #[derive(Parser, Debug)]
@@ -70,6 +70,10 @@ pub struct RenderArgs {
     pub exposure: Option<f32>,
     #[command(flatten)]
     pub knobs: Knobs,
+    /// Also render the ray-traced reference of the same scene (rays everywhere, the same VPLs),
+    /// and print the speed-up (medians of a few alternated frames, caches warm) and the PSNR.
+    #[arg(long)]
+    pub vs_reference: bool,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -163,7 +167,7 @@ fn render(a: &RenderArgs) -> Result<()> {
     output::check_outputs(&outputs)?;
 
     let options = a.knobs.options_for(&scene)?;
-    let renderer = Renderer::new(&scene, options);
+    let mut renderer = Renderer::new(&scene, options);
     say(format!(
         "{}: {} triangles, {} lights, {}x{}, {} threads; BVH {:.1} ms\nplan:\n{}",
         scene.name,
@@ -176,20 +180,12 @@ fn render(a: &RenderArgs) -> Result<()> {
         renderer.plan.to_string().trim_end()
     ));
 
-    let bar = if a.quiet || !std::io::stderr().is_terminal() {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let total = u64::from(scene.settings.height) * u64::from(renderer.progress_passes());
-        let b =
-            indicatif::ProgressBar::with_draw_target(Some(total), indicatif::ProgressDrawTarget::stderr());
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    };
+    let rows = u64::from(scene.settings.height) * u64::from(renderer.progress_passes());
+    let bar = progress_bar(rows, "rows", a.quiet);
     let frame = renderer.render(&|| bar.inc(1));
     bar.finish_and_clear();
+    let (bvh_ms, raster) = (renderer.bvh_build_ms(), renderer.raster_stats());
+    let vs = if a.vs_reference { Some(vs_reference(&mut renderer, &frame.film, a.quiet)?) } else { None };
 
     say(format!("this frame:\n{}", hyrt::plan::format_decisions(&frame.stats.decisions).trim_end()));
     let r = &frame.stats.rays;
@@ -205,6 +201,20 @@ fn render(a: &RenderArgs) -> Result<()> {
         r.total(),
         times.join(", ")
     ));
+    if let Some(v) = &vs {
+        say(format!(
+            "vs the reference: {:.1} ms against {:.1} ms (medians of {} alternated frames, caches warm): {:.2}x faster, PSNR {}",
+            v.hybrid_ms,
+            v.reference_ms,
+            VS_FRAMES,
+            v.speedup,
+            if v.psnr_db.is_infinite() {
+                "inf dB (identical)".into()
+            } else {
+                format!("{:.2} dB", v.psnr_db)
+            }
+        ));
+    }
     for (l, s) in frame.stats.lights.iter().enumerate() {
         let wrong = match (s.wrong, s.wrong_hint, s.wrong_traversal) {
             (Some(m), Some(h), Some(t)) => {
@@ -228,10 +238,11 @@ fn render(a: &RenderArgs) -> Result<()> {
     }
     if let Some(p) = &a.stats {
         let opts = hyrt::options::to_json(&options, scene.settings.max_depth);
-        let mut stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, renderer.bvh_build_ms());
+        let mut stats = RenderStats::new(&scene, &renderer.plan, opts, &frame.stats, bvh_ms);
         if options.visibility == Visibility::Raster {
-            stats = stats.with_raster(renderer.raster_stats());
+            stats = stats.with_raster(raster);
         }
+        stats.vs_reference = vs;
         let json = serde_json::to_string_pretty(&stats)?;
         staged.push(output::stage(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?);
     }
@@ -241,6 +252,53 @@ fn render(a: &RenderArgs) -> Result<()> {
         say(format!("wrote {}", p.display()));
     }
     Ok(())
+}
+
+/// Frames of each side timed by `--vs-reference`.
+const VS_FRAMES: usize = 3;
+
+/// `--vs-reference`: the hybrid's frame against the reference's, both timed with warm caches,
+/// alternated, and the image compared.
+fn vs_reference(renderer: &mut Renderer, film: &hyrt::film::Film, quiet: bool) -> Result<VsReference> {
+    let hybrid = *renderer.options();
+    let reference = hybrid.reference_for();
+    let bar = progress_bar(2 * VS_FRAMES as u64 + 1, "frames", quiet);
+    bar.set_message("the reference");
+    renderer.set_options(reference);
+    let ref_film = renderer.render(&|| {}).film;
+    bar.inc(1);
+    let (mut h, mut r) = (Vec::new(), Vec::new());
+    for _ in 0..VS_FRAMES {
+        for (o, times) in [(hybrid, &mut h), (reference, &mut r)] {
+            renderer.set_options(o);
+            times.push(renderer.render(&|| {}).stats.time_ms["total"]);
+            bar.inc(1);
+        }
+    }
+    renderer.set_options(hybrid);
+    bar.finish_and_clear();
+    let (hybrid_ms, reference_ms) = (metrics::Timing::of(&h).median, metrics::Timing::of(&r).median);
+    Ok(VsReference {
+        reference_ms,
+        hybrid_ms,
+        speedup: reference_ms / hybrid_ms.max(1e-9),
+        psnr_db: metrics::psnr(renderer.scene, &ref_film, film)?,
+    })
+}
+
+/// The one progress bar of the commands: `total` units on stderr, hidden when `quiet` or when
+/// stderr is not a terminal.
+pub fn progress_bar(total: u64, unit: &str, quiet: bool) -> indicatif::ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let b = indicatif::ProgressBar::with_draw_target(Some(total), indicatif::ProgressDrawTarget::stderr());
+    let template = format!("{{bar:40}} {{pos}}/{{len}} {unit} {{elapsed}} {{msg}}");
+    b.set_style(
+        indicatif::ProgressStyle::with_template(&template)
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    b
 }
 
 fn compare(a: &CompareArgs) -> Result<()> {

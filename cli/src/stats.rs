@@ -41,6 +41,22 @@ pub struct RenderStats<'a> {
     pub raster: Option<serde_json::Value>,
     /// Milliseconds: `total` (BVH build + frame), `frame`, `bvh_build` and one entry per pass.
     pub time_ms: serde_json::Map<String, serde_json::Value>,
+    /// With `--vs-reference`: the frame against the ray-traced reference.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vs_reference: Option<VsReference>,
+}
+
+/// `hyrt render --vs-reference`: medians of alternated frames with warm caches, and the image
+/// against the reference's.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct VsReference {
+    pub reference_ms: f64,
+    pub hybrid_ms: f64,
+    /// `reference_ms / hybrid_ms`.
+    pub speedup: f64,
+    /// PSNR of display luminance against the reference (`inf`: identical).
+    #[serde(serialize_with = "hyrt::metrics::ser_psnr")]
+    pub psnr_db: f64,
 }
 
 impl<'a> RenderStats<'a> {
@@ -91,6 +107,7 @@ impl<'a> RenderStats<'a> {
             }),
             raster: None,
             time_ms,
+            vs_reference: None,
         }
     }
 

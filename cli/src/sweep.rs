@@ -27,10 +27,7 @@
 //! marked) and `README.md` (the command line and a table sorted by time); with `--images`,
 //! `images/` holds each film as PNG and EXR.
 
-use std::{
-    io::IsTerminal,
-    path::{Path, PathBuf},
-};
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
@@ -273,7 +270,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
     // Each combination's frames come with as many of the reference's.
     let total = frames(&ref_options) * (1 + combos.len() as u64)
         + combos.iter().map(|c| frames(&c.options)).sum::<u64>();
-    let bar = progress_bar(total);
+    let bar = crate::cli::progress_bar(total, "frames", false);
     let say = |s: String| bar.suspend(|| eprintln!("{s}"));
     let progress = |label: &str| {
         bar.set_message(label.to_string());
@@ -468,18 +465,6 @@ fn reference_flags(reference: &str, combos: &[Combo]) -> Result<(Vec<String>, Op
         format!("--vpl-clamp={}", io.clamp),
     ]);
     Ok((flags, Some(c.label.clone())))
-}
-
-fn progress_bar(total: u64) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let b = indicatif::ProgressBar::with_draw_target(Some(total), indicatif::ProgressDrawTarget::stderr());
-    b.set_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed} {msg}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    b
 }
 
 /// A file name from a label: letters, digits, `.`, `-` and `_` kept, `=` as `-`, the rest `_`.

@@ -48,6 +48,8 @@ fn stats_json_has_plan_rays_and_times() {
         "--size",
         "64x48",
         "-q",
+        "--preset",
+        "reference",
         "-o",
         d.join("c.png").to_str().unwrap(),
         "--stats",
@@ -55,6 +57,7 @@ fn stats_json_has_plan_rays_and_times() {
     ]);
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
+    assert!(v.get("vs_reference").is_none(), "only with --vs-reference");
     assert_eq!(v["scene"], "cornell");
     assert_eq!(v["width"], 64);
     assert_eq!(v["height"], 48);
@@ -377,6 +380,9 @@ fn scene_file_indirect_table_asks_for_vpls() {
         serde_json::from_slice::<serde_json::Value>(&read(&stats)).unwrap()
     };
     let v = run(&[]);
+    assert_eq!(v["options"]["indirect"], "maps", "the hybrid (the default preset) uses VPL maps");
+    assert_eq!(v["options"]["visibility"], "raster");
+    let v = run(&["--preset", "reference"]);
     assert_eq!(v["options"]["indirect"], "rays");
     assert_eq!((v["options"]["vpls"].as_u64(), v["options"]["vpl_bounces"].as_u64()), (Some(12), Some(2)));
     assert!((v["options"]["vpl_clamp"].as_f64().unwrap() - 0.02).abs() < 1e-6);
@@ -608,4 +614,41 @@ fn knob_table_in_docs_is_current() {
         doc[a..b] == table,
         "docs/cli.md's knob table is stale: UPDATE_DOCS=1 cargo test --release -p hyrt-cli --test cli knob_table"
     );
+}
+
+/// `hyrt render` without a preset renders the hybrid; `--vs-reference` also renders the
+/// reference and reports the speed-up and the PSNR, on the terminal and in the stats.
+#[test]
+fn render_defaults_to_the_hybrid_and_compares_with_the_reference() {
+    let d = out_dir("vs_reference");
+    let (png, stats) = (d.join("c.png"), d.join("s.json"));
+    let args = ["render", "cornell", "--size", "64x48", "--vs-reference", "-o", png.to_str().unwrap()];
+    let (ok, _, err) = hyrt(&[&args[..], &["--stats", stats.to_str().unwrap()]].concat());
+    assert!(ok, "{err}");
+    assert!(err.contains("vs the reference: ") && err.contains("faster, PSNR "), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
+    assert_eq!(v["options"]["visibility"], "raster");
+    assert_eq!(v["options"]["shadows"], "smerts");
+    let vs = &v["vs_reference"];
+    let (r, h) = (vs["reference_ms"].as_f64().unwrap(), vs["hybrid_ms"].as_f64().unwrap());
+    assert!(r > 0.0 && h > 0.0 && (vs["speedup"].as_f64().unwrap() - r / h).abs() < 1e-9, "{vs}");
+    assert!(vs["psnr_db"] == "inf" || vs["psnr_db"].as_f64().unwrap() > 30.0, "{vs}");
+    // The image written is the hybrid's, as without the flag.
+    let (ok, _, err) =
+        hyrt(&["render", "cornell", "--size", "64x48", "-q", "-o", d.join("plain.png").to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(read(&png) == read(&d.join("plain.png")), "--vs-reference changed the image");
+    // The reference preset against itself is exact.
+    let (ok, _, err) = hyrt(&[
+        "render",
+        "cornell",
+        "--size",
+        "32x24",
+        "--preset",
+        "reference",
+        "--vs-reference",
+        "-o",
+        d.join("r.png").to_str().unwrap(),
+    ]);
+    assert!(ok && err.contains("PSNR inf dB (identical)"), "{err}");
 }

@@ -24,7 +24,7 @@ use hyrt::{
     camera::CameraRays,
     film::Film,
     plan::{FrameDecision, Plan},
-    render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, Visibility, vpl::Vpl},
+    render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, vpl::Vpl},
     scene::{Camera, PointLight, Scene},
 };
 use hyrt_shadowmap::{
@@ -268,24 +268,7 @@ pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
     Ok((scene, options))
 }
 
-/// The reference for hybrid options `o`: rays everywhere, with the same VPLs (by rays, every
-/// VPL at every pixel: no interleaving) when the hybrid has indirect light. The map and VPL-map
-/// knobs stay the hybrid's, unused, so that switching the renderer between the two drops no
-/// cache.
-pub fn reference_options(o: &Options) -> Options {
-    let mut r = Options {
-        visibility: Visibility::Rays,
-        shadows: Shadows::Rays,
-        indirect: if o.indirect == Indirect::None { Indirect::None } else { Indirect::Rays },
-        check_visibility: false,
-        keep_buffers: false,
-        ..*o
-    };
-    r.indirect_opts.interleave = 1;
-    r
-}
-
-/// Whether two reference options (of [`reference_options`]) render the same image: only the
+/// Whether two reference options (of [`Options::reference_for`]) render the same image: only the
 /// indirect light and its VPLs matter (the map knobs are unused by rays).
 pub fn same_reference(a: &Options, b: &Options) -> bool {
     let (x, y) = (&a.indirect_opts, &b.indirect_opts);
@@ -420,9 +403,9 @@ impl State<'_> {
     }
 
     /// The reference of the renderer's pose and hybrid options `o`, if the last one is.
-    fn reference_for(&self, o: &Options) -> Option<Arc<Reference>> {
+    fn reference_of(&self, o: &Options) -> Option<Arc<Reference>> {
         let r = self.reference.as_ref()?;
-        (same_reference(&r.options, &reference_options(o)) && r.pose == self.pose).then(|| r.clone())
+        (same_reference(&r.options, &o.reference_for()) && r.pose == self.pose).then(|| r.clone())
     }
 
     fn render(
@@ -509,7 +492,7 @@ impl State<'_> {
             }
         };
         let comparison =
-            self.reference_for(&options).map(|reference| comparison(reference, false, &frame.film, scene));
+            self.reference_of(&options).map(|reference| comparison(reference, false, &frame.film, scene));
         if full {
             // Only a full frame gets a reference afterwards.
             self.film = Some(frame.film.clone());
@@ -540,7 +523,7 @@ impl State<'_> {
     /// to rays everywhere: same BVH, same VPLs), and compares the two.
     fn compare(&mut self, progress: &Progress, notify: &(dyn Fn() + Send + Sync)) -> Comparison {
         let options = *self.renderer.options();
-        let ref_opts = reference_options(&options);
+        let ref_opts = options.reference_for();
         let h = self.renderer.scene.settings.height;
         let exposure = self.renderer.scene.settings.exposure;
         self.renderer.set_options(ref_opts);
@@ -643,6 +626,7 @@ fn vpl_map(renderer: &Renderer, index: usize) -> VplMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use hyrt::render::Visibility;
 
     #[test]
     fn progress_is_rows_done_of_the_stage() {
@@ -688,7 +672,7 @@ mod tests {
         let mut h = Options::hybrid();
         h.indirect = Indirect::Maps;
         h.indirect_opts.interleave = 4;
-        let r = reference_options(&h);
+        let r = h.reference_for();
         assert_eq!((r.visibility, r.shadows, r.indirect), (Visibility::Rays, Shadows::Rays, Indirect::Rays));
         assert_eq!(r.indirect_opts.interleave, 1, "the reference evaluates every VPL");
         // The caches' keys are the hybrid's: switching between the two drops nothing.
@@ -700,10 +684,10 @@ mod tests {
         h2.shadow.bias = 3.0;
         h2.shadow.map.resolution = 64;
         h2.indirect_opts.map.resolution = 64;
-        assert!(same_reference(&r, &reference_options(&h2)));
+        assert!(same_reference(&r, &h2.reference_for()));
         h2.indirect_opts.vpl.paths += 1;
-        assert!(!same_reference(&r, &reference_options(&h2)));
+        assert!(!same_reference(&r, &h2.reference_for()));
         h2.indirect = Indirect::None;
-        assert!(!same_reference(&r, &reference_options(&h2)));
+        assert!(!same_reference(&r, &h2.reference_for()));
     }
 }

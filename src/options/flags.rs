@@ -14,7 +14,7 @@ use crate::scene::Scene;
 /// value), and the visibility check.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Knobs {
-    /// The starting point (the reference when not given).
+    /// The starting point (the hybrid when not given).
     pub preset: Option<Preset>,
     /// The knob flags given, by name ([`Knob::name`]), with their values, in [`KNOBS`] order.
     pub values: Vec<(&'static str, String)>,
@@ -126,7 +126,7 @@ impl Args for Knobs {
             .long(PRESET)
             .value_name("PRESET")
             .value_parser(PossibleValuesParser::new(Preset::NAMES))
-            .help("`reference`: rays everywhere (the default); `hybrid`: raster visibility + SMeRTS with the measured defaults. Each knob flag then overrides its own value.");
+            .help("`hybrid` (the default): raster visibility + SMeRTS with the measured defaults; `reference`: rays everywhere, the ground truth. Each knob flag then overrides its own value.");
         let check = Arg::new(CHECK).long(CHECK).action(ArgAction::SetTrue).help(
             "Also cast a shadow ray for every map decision and count those it contradicts (wrong-visibility pixels, in the stats; these rays are not counted as frame rays).",
         );
@@ -172,10 +172,12 @@ mod tests {
         assert_eq!(o.shadow.borders, super::super::Borders::MapSpace, "`depth` is the old name");
         assert_eq!(o.visibility, super::super::Visibility::Raster);
         let vpls = |flags: &[&str]| Knobs::from_flags(flags).unwrap().options().unwrap().indirect;
-        assert_eq!(vpls(&["--vpls", "4"]), Indirect::Rays);
+        assert_eq!(vpls(&["--preset", "reference", "--vpls", "4"]), Indirect::Rays);
+        assert_eq!(vpls(&["--vpls", "4"]), Indirect::Maps, "the hybrid is the default preset");
         assert_eq!(vpls(&["--preset", "hybrid", "--vpls", "4"]), Indirect::Maps);
         assert_eq!(vpls(&["--preset", "hybrid", "--vpls", "4", "--indirect", "none"]), Indirect::None);
         assert_eq!(vpls(&["--preset", "hybrid"]), Indirect::None);
+        assert_eq!(Knobs::default().options().unwrap(), Options::hybrid());
         let e = Knobs::from_flags(&["--bias", "-1"]).unwrap_err().to_string();
         assert!(e.contains("--bias must be a finite number >= 0, got -1"), "{e}");
         let e = Knobs::from_flags(&["--shadow-map-res", "abc"]).unwrap_err().to_string();

@@ -11,15 +11,24 @@
 mod common;
 
 use common::*;
-use hyrt::{film::Film, metrics, render::Options};
+use hyrt::{
+    film::Film,
+    metrics,
+    render::{Indirect, Options},
+};
 
 const MIN_PSNR_DB: f64 = 50.0;
 
 fn check(name: &str, spec: &str, w: u32, h: u32) {
+    check_with(name, spec, w, h, Options::reference());
+}
+
+/// [`check`] with `options` (the hybrid's goldens).
+fn check_with(name: &str, spec: &str, w: u32, h: u32, options: Options) {
     let mut scene = hyrt::scene::load(spec).unwrap_or_else(|e| panic!("{e:#}"));
     scene.settings.width = w;
     scene.settings.height = h;
-    let frame = render(&scene, Options::default());
+    let frame = render(&scene, options);
     let golden = root().join("tests/golden").join(format!("{name}.png"));
     if std::env::var_os("HYRT_BLESS").is_some() {
         std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
@@ -67,4 +76,21 @@ fn cornell_bunny_mirror() {
 fn office() {
     let spec = root().join("scenes/office.toml");
     check("office", spec.to_str().unwrap(), 160, 120);
+}
+
+/// The hybrid, the product, on the thesis's first scene: raster visibility, SMeRTS with cube
+/// maps, and indirect light from 45 VPLs with one paraboloid map each (the defaults).
+#[test]
+fn hybrid_cornell_bunny_mirror() {
+    let spec = root().join("scenes/cornell-bunny-mirror.toml");
+    let mut o = Options::hybrid();
+    o.indirect = Indirect::Maps;
+    check_with("hybrid-cornell-bunny-mirror", spec.to_str().unwrap(), 160, 120, o);
+}
+
+/// The hybrid on the conference room: four lights, SMeRTS with the default maps.
+#[test]
+fn hybrid_conference() {
+    let spec = root().join("scenes/conference.toml");
+    check_with("hybrid-conference", spec.to_str().unwrap(), 160, 120, Options::hybrid());
 }

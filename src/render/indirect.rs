@@ -579,6 +579,48 @@ mod tests {
     use super::*;
     use crate::render::Options;
 
+    /// The indirect pass (without interleaving) gives, at every pixel, the bytes of
+    /// [`Vpls::at`] at that pixel's camera hit: with VPL rays, and with VPL maps, whether the
+    /// pass makes its own shading points or is given the direct-light pass's.
+    #[test]
+    fn the_pass_equals_vpls_at_bit_for_bit() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        (scene.settings.width, scene.settings.height) = (40, 30);
+        for indirect in [Indirect::Rays, Indirect::Maps] {
+            let mut o = Options::hybrid();
+            o.indirect = indirect;
+            o.indirect_opts.vpl.paths = 12;
+            o.indirect_opts.map.resolution = 64;
+            let r = Renderer::new(&scene, o);
+            let v = r.vpls(&mut FrameStats::default());
+            let (gbuffer, _) = r.visibility();
+            let w = scene.settings.width as usize;
+            let hit = |i: usize| {
+                let h = gbuffer[i].as_ref().filter(|h| r.diffuse(h.tri))?;
+                Some(SurfaceHit::new(&scene, h, r.camera_ray((i % w) as u32, (i / w) as u32).dir))
+            };
+            let expected: Vec<Vec3> = (0..gbuffer.len())
+                .map(|i| hit(i).map_or(Vec3::ZERO, |s| v.at(&r, &s, &mut RayCounts::default())))
+                .collect();
+            assert!(expected.iter().filter(|e| **e != Vec3::ZERO).count() > 500, "{indirect:?}: lit pixels");
+            let bits = |x: &[Vec3]| x.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            let mut out = vec![Vec3::ZERO; gbuffer.len()];
+            run(&r, &v, &gbuffer, None, &mut out, &|| {});
+            assert!(bits(&out) == bits(&expected), "{indirect:?}: the pass differs from Vpls::at");
+            if indirect == Indirect::Maps {
+                let points: Vec<ShadePoint> = (0..gbuffer.len())
+                    .map(|i| hit(i).map_or_else(ShadePoint::default, |s| ShadePoint::of(&s)))
+                    .collect();
+                let mut shared = vec![Vec3::ZERO; gbuffer.len()];
+                run(&r, &v, &gbuffer, Some(&points), &mut shared, &|| {});
+                assert!(
+                    bits(&shared) == bits(&expected),
+                    "the pass with shared points differs from Vpls::at"
+                );
+            }
+        }
+    }
+
     /// The batched gather of mirror hits gives what one hit at a time gives, to the bit, with
     /// and without interleaving.
     #[test]

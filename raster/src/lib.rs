@@ -6,6 +6,20 @@
 //! slices or made on demand by the setup tasks ([`TriangleSource`]), and returns, per pixel, the
 //! visible triangle's id, its depth and its perspective-correct barycentrics.
 //!
+//! ```
+//! use glam::Vec4;
+//! use hyrt_raster::{EMPTY_ID, RasterOptions, rasterize};
+//!
+//! // One counter-clockwise triangle in clip space (w = 1), covering the lower-left half of a
+//! // 4x4 image at depth 0.5, with id 7.
+//! let tri = [Vec4::new(-1.0, -1.0, 0.5, 1.0), Vec4::new(1.0, -1.0, 0.5, 1.0), Vec4::new(-1.0, 1.0, 0.5, 1.0)];
+//! let target = rasterize(&[tri], &[7], 4, 4, &RasterOptions::default());
+//! // Pixel (0, 3), bottom left, is covered; pixel (3, 0), top right, is not.
+//! assert_eq!(target.id[target.index(0, 3)], 7);
+//! assert_eq!(target.depth[target.index(0, 3)], 0.5);
+//! assert_eq!(target.id[target.index(3, 0)], EMPTY_ID);
+//! ```
+//!
 //! # Conventions
 //!
 //! * **Clip space** is the wgpu / D3D / Vulkan one: a point `(x, y, z, w)` is visible when

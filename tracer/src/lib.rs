@@ -9,6 +9,25 @@
 //! - **free of self-intersection without magic epsilons**: hit points carry a rounding-error
 //!   bound and new rays start from an origin offset just past it ([`offset`]);
 //! - **counted** by kind ([`RayCounts`]), per caller, so parallel passes reduce in a fixed order.
+//!
+//! ```
+//! use glam::Vec3;
+//! use hyrt_tracer::{Ray, RayCounts, RayKind, Tracer};
+//!
+//! // A unit square in the z = 0 plane, as two triangles sharing the diagonal.
+//! let (a, b, c, d) = (Vec3::new(0.0, 0.0, 0.0), Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y);
+//! let tracer = Tracer::build(&[[a, b, c], [a, c, d]]);
+//! let mut counts = RayCounts::default();
+//!
+//! // Straight down through the shared diagonal: watertight, so it hits, at distance 1.
+//! let down = Ray::new(Vec3::new(0.5, 0.5, 1.0), Vec3::NEG_Z, f32::INFINITY);
+//! let hit = tracer.closest_hit(&down, RayKind::Primary, &mut counts).expect("the square");
+//! assert_eq!(hit.t, 1.0);
+//! // Beside the square: nothing to hit, nothing blocks.
+//! let beside = Ray::new(Vec3::new(2.0, 0.5, 1.0), Vec3::NEG_Z, f32::INFINITY);
+//! assert!(!tracer.occluded(&beside, RayKind::Shadow, &mut counts));
+//! assert_eq!((counts.primary, counts.shadow), (1, 1));
+//! ```
 
 pub mod batch;
 pub mod counts;

@@ -73,7 +73,10 @@ fn shadow_ray_outcomes_and_borders_match_the_stats() {
             let cast = rays.iter().filter(|&&k| k != RAY_NONE).count() as u64;
             assert_eq!(cast, st.undecided, "light {l}");
             for (i, &k) in rays.iter().enumerate() {
-                assert_eq!(k != RAY_NONE, b.undecided[l][i] && b.occ[l][i] != hyrt_shadowmap::border::NONE);
+                assert_eq!(
+                    k != RAY_NONE,
+                    b.undecided[l][i] && b.occ[l][i] != hyrt_shadowmap::classify::Decision::NotNeeded
+                );
             }
             hints += rays.iter().filter(|&&k| k == RAY_HINT).count() as u64;
             traversals += rays.iter().filter(|&&k| k == RAY_TRAVERSAL).count() as u64;
@@ -83,7 +86,7 @@ fn shadow_ray_outcomes_and_borders_match_the_stats() {
                 let undecided: Vec<bool> = b.undecided[l]
                     .iter()
                     .zip(&b.occ[l])
-                    .map(|(u, o)| *u && *o != hyrt_shadowmap::border::NONE)
+                    .map(|(u, o)| *u && *o != hyrt_shadowmap::classify::Decision::NotNeeded)
                     .collect();
                 assert_eq!(border, &undecided, "light {l}");
             }

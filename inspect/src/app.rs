@@ -926,7 +926,7 @@ impl Inspector {
                     RAY_HINT => "ray cast: blocked by the hint (no traversal)".to_string(),
                     RAY_TRAVERSAL => format!(
                         "ray cast: traversal, {}",
-                        if lp.decision == Some(hyrt_shadowmap::border::SHADOW) {
+                        if lp.decision == Some(hyrt_shadowmap::classify::Decision::Shadow) {
                             "blocked"
                         } else {
                             "reached the light"

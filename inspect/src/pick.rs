@@ -7,7 +7,7 @@ use hyrt::render::{
 };
 use hyrt_shadowmap::{
     EMPTY,
-    border::{LIT, NONE, SHADOW},
+    classify::Decision,
     classify::{Classifier, Lookup},
 };
 use hyrt_tracer::RayCounts;
@@ -51,8 +51,8 @@ pub struct LightPick {
     pub by_rays: bool,
     /// Map-based shadows: where the point falls in the light's map and what the map says.
     pub map: Option<MapPick>,
-    /// The final decision (`LIT`, `SHADOW`, or `NONE`), from the frame's occlusion buffer.
-    pub decision: Option<u8>,
+    /// The final decision, from the frame's occlusion buffer.
+    pub decision: Option<Decision>,
     /// Border before dilation, and undecided (border after dilation: a ray was cast).
     pub border: bool,
     pub undecided: bool,
@@ -149,12 +149,11 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
 }
 
 /// A decision's name.
-pub fn decision_name(d: u8) -> &'static str {
+pub fn decision_name(d: Decision) -> &'static str {
     match d {
-        LIT => "lit",
-        SHADOW => "shadowed",
-        NONE => "none",
-        _ => "?",
+        Decision::Lit => "lit",
+        Decision::Shadow => "shadowed",
+        Decision::NotNeeded => "none",
     }
 }
 

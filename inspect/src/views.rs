@@ -2,7 +2,7 @@
 //! window, no egui context: unit-tested below).
 //!
 //! Colour conventions, shared by every view and its legend:
-//! - occlusion maps: [`LIT`] yellow, [`SHADOW`] blue, decided by a ray (undecided by the map)
+//! - occlusion maps: [`Decision::Lit`] yellow, [`Decision::Shadow`] blue, decided by a ray (undecided by the map)
 //!   magenta, no decision needed (no hit, light behind the surface, mirror) near black, and with
 //!   the visibility check the map decisions a ray contradicts in red;
 //! - masks (borders, rays) are drawn over the frame's luminance, dimmed, so that the picture
@@ -18,11 +18,7 @@ use hyrt::{
     metrics::luminance,
     render::shadows::{RAY_HINT, RAY_NONE, RAY_TRAVERSAL},
 };
-use hyrt_shadowmap::{
-    LightMap,
-    border::{LIT, NONE, SHADOW},
-    vpl_map::VplMap,
-};
+use hyrt_shadowmap::{LightMap, classify::Decision, vpl_map::VplMap};
 use hyrt_tracer::RayCounts;
 
 pub const LIT_COLOR: Color32 = Color32::from_rgb(250, 210, 80);
@@ -88,11 +84,11 @@ fn gray(v: u8) -> Color32 {
     Color32::from_rgb(v, v, v)
 }
 
-/// A light's occlusion map: the final decision per pixel ([`LIT`] / [`SHADOW`] / [`NONE`]), with
+/// A light's occlusion map: the final decision per pixel ([`Decision::Lit`] / [`Decision::Shadow`] / [`Decision::NotNeeded`]), with
 /// the pixels a ray decided (`undecided`) in their own colour and, when given, the map
 /// decisions a ray contradicts (`wrong`) in red.
 pub fn occlusion_image(
-    occ: &[u8],
+    occ: &[Decision],
     undecided: &[bool],
     wrong: &[bool],
     width: u32,
@@ -101,14 +97,14 @@ pub fn occlusion_image(
     let pixels = occ.iter().enumerate().map(|(i, &o)| {
         if wrong.get(i).copied().unwrap_or(false) {
             WRONG_COLOR
-        } else if o == NONE {
+        } else if o == Decision::NotNeeded {
             NONE_COLOR
         } else if undecided.get(i).copied().unwrap_or(false) {
             UNDECIDED_COLOR
-        } else if o == SHADOW {
+        } else if o == Decision::Shadow {
             SHADOW_COLOR
         } else {
-            debug_assert_eq!(o, LIT);
+            debug_assert_eq!(o, Decision::Lit);
             LIT_COLOR
         }
     });
@@ -131,10 +127,10 @@ pub fn mask_image_in(mask: &[bool], backdrop: &[u8], width: u32, height: u32, co
 
 /// Where a light's selective shadow rays went: answered by the occluder hint (one triangle test),
 /// or traversing the BVH and then blocked or reaching the light; the backdrop elsewhere.
-pub fn ray_image(ray: &[u8], occ: &[u8], backdrop: &[u8], width: u32, height: u32) -> ColorImage {
+pub fn ray_image(ray: &[u8], occ: &[Decision], backdrop: &[u8], width: u32, height: u32) -> ColorImage {
     let pixels = backdrop.iter().enumerate().map(|(i, &b)| match ray.get(i).copied().unwrap_or(RAY_NONE) {
         RAY_HINT => HINT_COLOR,
-        RAY_TRAVERSAL if occ.get(i) == Some(&SHADOW) => TRAVERSAL_BLOCKED_COLOR,
+        RAY_TRAVERSAL if occ.get(i) == Some(&Decision::Shadow) => TRAVERSAL_BLOCKED_COLOR,
         RAY_TRAVERSAL => TRAVERSAL_CLEAR_COLOR,
         _ => gray(b),
     });
@@ -393,6 +389,7 @@ mod tests {
 
     #[test]
     fn occlusion_colours_are_distinct_and_wrong_wins() {
+        use Decision::{Lit as LIT, NotNeeded as NONE, Shadow as SHADOW};
         let occ = [LIT, SHADOW, NONE, LIT, SHADOW, LIT];
         let und = [false, false, false, true, true, false];
         let wrong = [false, false, false, false, false, true];
@@ -420,6 +417,7 @@ mod tests {
         assert_eq!(m.pixels, vec![BORDER_COLOR, gray(0), gray(90), gray(90)]);
         let m = mask_image_in(&[false, true], &back[..2], 2, 1, WRONG_COLOR);
         assert_eq!(m.pixels, vec![gray(90), WRONG_COLOR]);
+        use Decision::{Lit as LIT, Shadow as SHADOW};
         let occ = [SHADOW, LIT, SHADOW, LIT];
         let r = ray_image(&[RAY_HINT, RAY_TRAVERSAL, RAY_TRAVERSAL, RAY_NONE], &occ, &back, 4, 1);
         assert_eq!(r.pixels, vec![HINT_COLOR, TRAVERSAL_CLEAR_COLOR, TRAVERSAL_BLOCKED_COLOR, gray(90)]);

@@ -8,7 +8,7 @@ use hyrt_inspect::{
     Setup, navigate, pick,
     worker::{Command, Comparison, Pose, Render, Rendered, Reply, Worker},
 };
-use hyrt_shadowmap::border::NONE;
+use hyrt_shadowmap::classify::Decision;
 
 fn setup(options: Options) -> Setup {
     Setup {
@@ -182,7 +182,7 @@ fn picking_agrees_with_the_frame_buffers() {
             for lp in &p.lights {
                 let l = lp.light;
                 assert_eq!(lp.decision, Some(b.occ[l][i]));
-                assert_eq!(lp.needed, b.occ[l][i] != NONE, "({x}, {y}) light {l}");
+                assert_eq!(lp.needed, b.occ[l][i] != Decision::NotNeeded, "({x}, {y}) light {l}");
                 let Some(m) = &lp.map else { continue };
                 assert_eq!(m.lookup.map_border, b.map_border[l][i]);
                 assert_eq!(m.lookup.hint, b.hint[l][i]);

@@ -104,7 +104,9 @@ fn classify(bencher: Bencher, kind: &str) {
     };
     let pts = points();
     bencher.counter(divan::counter::ItemsCount::new(pts.len())).bench_local(|| {
-        pts.iter().filter(|(p, id)| cls.classify(*p, *id).decision == hyrt_shadowmap::border::LIT).count()
+        pts.iter()
+            .filter(|(p, id)| cls.classify(*p, *id).decision == hyrt_shadowmap::classify::Decision::Lit)
+            .count()
     });
 }
 
@@ -112,10 +114,11 @@ fn classify(bencher: Bencher, kind: &str) {
 /// scattered thin occluders): the Laplacian, and dilation by 1 and 3 pixels; pixels/s.
 #[divan::bench(args = [0, 1, 3])]
 fn borders(bencher: Bencher, dilate: usize) {
-    use hyrt_shadowmap::border::{LIT, NONE, SHADOW, dilate as grow, laplacian_border};
+    use Decision::{Lit as LIT, NotNeeded as NONE, Shadow as SHADOW};
+    use hyrt_shadowmap::border::{Decision, dilate as grow, laplacian_border};
     let (w, h) = (640usize, 480usize);
     let mut rng = Rng(7);
-    let occ: Vec<u8> = (0..w * h)
+    let occ: Vec<Decision> = (0..w * h)
         .map(|i| {
             let (x, y) = ((i % w) as f32 - 320.0, (i / w) as f32 - 240.0);
             let r = (x * x + y * y).sqrt() + 8.0 * (x.atan2(y) * 7.0).sin();

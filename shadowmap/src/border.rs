@@ -1,8 +1,8 @@
 //! Shadow borders in screen space: the thesis's Laplacian test on a per-light occlusion map, and
 //! dilation of the border.
 //!
-//! An occlusion map holds, per pixel, whether the light's depth map said [`LIT`] or [`SHADOW`],
-//! or [`NONE`] where no decision was needed (no surface, or the light is behind it). Shadow-map
+//! An occlusion map holds, per pixel, whether the light's depth map said [`Decision::Lit`] or
+//! [`Decision::Shadow`], or [`Decision::NotNeeded`] (no surface, or the light is behind it). Shadow-map
 //! aliasing is confined to where the decision changes, so those pixels are the ones to check with
 //! real rays.
 //!
@@ -13,8 +13,8 @@
 //! `{0, 1}` every term has the sign of `v(p)` (all `>= 0` for `v(p) = 1`, all `<= 0` for `0`), so
 //! the sum vanishes exactly when every neighbour equals `v(p)`: a pixel is a border pixel iff one
 //! of its 4 neighbours has the other decision. That is what [`laplacian_border`] computes,
-//! without arithmetic. Neighbours outside the image or with [`NONE`] do not count (they carry no
-//! decision to disagree with); a [`NONE`] pixel is never a border.
+//! without arithmetic. Neighbours outside the image or with no decision do not count (they carry
+//! nothing to disagree with); a pixel with no decision is never a border.
 //!
 //! # Dilation
 //!
@@ -23,12 +23,7 @@
 
 use rayon::prelude::*;
 
-/// Occlusion-map value: the map says the light reaches the point.
-pub const LIT: u8 = 0;
-/// Occlusion-map value: the map says something blocks the light.
-pub const SHADOW: u8 = 1;
-/// Occlusion-map value: no decision (no surface, or the light is behind it).
-pub const NONE: u8 = 2;
+pub use crate::classify::Decision;
 
 /// Border pixels of a row-major `width x height` occlusion map (see the module docs): `true`
 /// where a 4-neighbour holds the other decision.
@@ -36,7 +31,7 @@ pub const NONE: u8 = 2;
 /// # Panics
 ///
 /// If `occ.len() != width * height`.
-pub fn laplacian_border(occ: &[u8], width: usize, height: usize) -> Vec<bool> {
+pub fn laplacian_border(occ: &[Decision], width: usize, height: usize) -> Vec<bool> {
     assert_eq!(occ.len(), width * height, "occlusion map size");
     let mut out = vec![false; occ.len()];
     if width == 0 {
@@ -46,10 +41,11 @@ pub fn laplacian_border(occ: &[u8], width: usize, height: usize) -> Vec<bool> {
         let at = |x: usize, y: usize| occ[y * width + x];
         for (x, b) in row.iter_mut().enumerate() {
             let v = at(x, y);
-            if v == NONE {
-                continue;
-            }
-            let other = v ^ 1;
+            let other = match v {
+                Decision::Lit => Decision::Shadow,
+                Decision::Shadow => Decision::Lit,
+                Decision::NotNeeded => continue,
+            };
             *b = (x > 0 && at(x - 1, y) == other)
                 || (x + 1 < width && at(x + 1, y) == other)
                 || (y > 0 && at(x, y - 1) == other)
@@ -105,9 +101,10 @@ mod tests {
     #[test]
     fn border_is_the_nonzero_laplacian() {
         for bits in 0u32..(1 << 9) {
-            let occ: Vec<u8> = (0..9).map(|i| (bits >> i & 1) as u8).collect();
+            let occ: Vec<Decision> =
+                (0..9).map(|i| if bits >> i & 1 == 1 { Decision::Shadow } else { Decision::Lit }).collect();
             let b = laplacian_border(&occ, 3, 3);
-            let v = |x: usize, y: usize| i32::from(occ[y * 3 + x]);
+            let v = |x: usize, y: usize| i32::from(occ[y * 3 + x] as u8);
             let lap = 4 * v(1, 1) - v(0, 1) - v(2, 1) - v(1, 0) - v(1, 2);
             assert_eq!(b[4], lap != 0, "pattern {bits:09b}");
         }
@@ -115,6 +112,7 @@ mod tests {
 
     #[test]
     fn none_pixels_neither_are_nor_make_borders() {
+        use Decision::{Lit as LIT, NotNeeded as NONE, Shadow as SHADOW};
         let occ = [LIT, NONE, SHADOW, NONE, NONE, NONE];
         assert_eq!(laplacian_border(&occ, 3, 2), vec![false; 6]);
         let occ = [LIT, SHADOW, NONE];
@@ -124,7 +122,8 @@ mod tests {
     #[test]
     fn a_shadow_edge_gives_a_two_pixel_wide_border() {
         let (w, h) = (8, 5);
-        let occ: Vec<u8> = (0..w * h).map(|i| if i % w < 3 { SHADOW } else { LIT }).collect();
+        let occ: Vec<Decision> =
+            (0..w * h).map(|i| if i % w < 3 { Decision::Shadow } else { Decision::Lit }).collect();
         let b = laplacian_border(&occ, w, h);
         for y in 0..h {
             for x in 0..w {
@@ -157,7 +156,7 @@ mod tests {
     fn empty_and_degenerate_sizes() {
         assert!(laplacian_border(&[], 0, 0).is_empty());
         assert!(dilate(&[], 0, 5, 2).is_empty());
-        assert_eq!(laplacian_border(&[SHADOW], 1, 1), vec![false]);
+        assert_eq!(laplacian_border(&[Decision::Shadow], 1, 1), vec![false]);
         assert_eq!(dilate(&[true], 1, 1, 3), vec![true]);
     }
 }

@@ -50,10 +50,26 @@
 
 use glam::Vec3;
 
-use crate::border::{LIT, SHADOW};
 use crate::map::{EMPTY, LightMap, MapCoord, MapKind};
 
-/// A texel decision between lit and shadowed (see [`Classifier::classify`]); never stored.
+/// What decides whether a light reaches a point: the light's map (or, on borders, a ray).
+/// One byte per pixel and light in occlusion maps ([`crate::border`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Decision {
+    /// The light reaches the point.
+    Lit = 0,
+    /// Something blocks the light.
+    Shadow = 1,
+    /// No decision is needed: no surface, or the light is behind it.
+    #[default]
+    NotNeeded = 2,
+}
+
+// A texel's three-way verdict inside [`Classifier::classify_at`]; never stored.
+const LIT: u8 = 0;
+const SHADOW: u8 = 1;
+/// An occluder within the bias band of the point: shadowed, and a border.
 const AMBIGUOUS: u8 = 3;
 
 /// Relative margin matching the tracer's shadow rays, which stop `1e-4` of the distance short
@@ -177,16 +193,17 @@ pub enum Hull {
 /// The outcome of classifying one point against one light's map.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Lookup {
-    /// The decision of the texel containing the point's projection: [`LIT`] or [`SHADOW`].
-    pub decision: u8,
-    /// The triangle of that texel when it decided [`SHADOW`], else the first triangle of the 2x2
-    /// footprint that decided [`SHADOW`], else [`EMPTY`]: the occluder to test first if a ray is
+    /// The decision of the texel containing the point's projection: [`Decision::Lit`] or
+    /// [`Decision::Shadow`].
+    pub decision: Decision,
+    /// The triangle of that texel when it decided shadow, else the first triangle of the 2x2
+    /// footprint that decided shadow, else [`EMPTY`]: the occluder to test first if a ray is
     /// cast.
     pub hint: u32,
     /// Whether the 2x2 footprint disagrees (or leaves the face): a map-space border.
     pub map_border: bool,
     /// Whether the texel's occluder lies within the bias band of the point (the decision is
-    /// then [`SHADOW`] and `map_border` is set): a neighbouring triangle's plane past a crease,
+    /// then [`Decision::Shadow`] and `map_border` is set): a neighbouring triangle's plane past a crease,
     /// or a contact shadow. Lookups without rays may prefer to call it lit.
     pub ambiguous: bool,
     /// Face and texel of the decision (for inspection).
@@ -460,7 +477,7 @@ impl Classifier<'_> {
         // no arithmetic. This is the rule below with every texel deciding `LIT`.
         if in_domain && foot_ids.iter().all(|&id| id == own || id == EMPTY) {
             return Lookup {
-                decision: LIT,
+                decision: Decision::Lit,
                 hint: EMPTY,
                 map_border: false,
                 ambiguous: false,
@@ -501,7 +518,7 @@ impl Classifier<'_> {
         let mut hint = if d != LIT { centre } else { EMPTY };
         // An ambiguous texel leans to shadow (an occluder is there, only closer than the bias
         // can tell), and is a border.
-        let decision = if d == LIT { LIT } else { SHADOW };
+        let decision = if d == LIT { Decision::Lit } else { Decision::Shadow };
         let mut map_border = d == AMBIGUOUS || !in_domain;
         if !map_border {
             // Most footprints see one or two triangles: decide each once.
@@ -513,7 +530,7 @@ impl Classifier<'_> {
                 seen[n] = id;
                 n += 1;
                 let d = decide(id, xy);
-                map_border |= d != decision;
+                map_border |= d != decision as u8;
                 if d != LIT && hint == EMPTY {
                     hint = id;
                 }

@@ -13,8 +13,7 @@
 //! use glam::Vec3;
 //! use hyrt_shadowmap::{
 //!     LightMap, MapOptions,
-//!     border::{LIT, SHADOW},
-//!     classify::{Classifier, point_error_bound, triangle_planes},
+//!     classify::{Classifier, Decision, point_error_bound, triangle_planes},
 //! };
 //!
 //! // A floor (triangles 0, 1) at y = 0 and a small square occluder (2, 3) at y = 1, under a
@@ -32,9 +31,9 @@
 //! let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris) };
 //! // Under the occluder: shadowed, with the occluder as the hint for a ray; far from it: lit.
 //! let under = cls.classify(Vec3::new(0.0, 0.0, 0.1), 1);
-//! assert_eq!(under.decision, SHADOW);
+//! assert_eq!(under.decision, Decision::Shadow);
 //! assert!(under.hint == 2 || under.hint == 3);
-//! assert_eq!(cls.classify(Vec3::new(2.0, 0.0, 1.0), 0).decision, LIT);
+//! assert_eq!(cls.classify(Vec3::new(2.0, 0.0, 1.0), 0).decision, Decision::Lit);
 //! ```
 
 pub mod border;

@@ -5,7 +5,7 @@
 use glam::Vec3;
 use hyrt_shadowmap::{
     LightMap, MapKind, MapOptions,
-    border::LIT,
+    classify::Decision,
     classify::{Classifier, Hull, plane_groups, point_error_bound, triangle_planes},
 };
 
@@ -101,7 +101,7 @@ fn hull_decisions_are_every_points_decision_without_border() {
                             + corners[3] * a * b;
                         let lk = cls.classify(p, own(p));
                         assert!(
-                            (lk.decision == LIT) == (hull == Hull::Lit) && !lk.map_border,
+                            (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
                             "res {res}, centre {centre}: {hull:?} but {p} is {lk:?}"
                         );
                     }

@@ -30,7 +30,7 @@ use std::time::Instant;
 use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap,
-    border::{LIT, NONE, SHADOW},
+    classify::Decision,
     classify::{Classifier, Hull, Plane},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
@@ -211,10 +211,10 @@ fn bit(bytes: &[u8], l: usize) -> bool {
 /// the passes work on; they are then kept in the [`super::Frame`].
 #[derive(Clone, Debug, Default)]
 pub struct ShadowBuffers {
-    /// The decision: [`LIT`], [`SHADOW`] or [`NONE`] (no decision needed: no hit, the light
+    /// The decision: lit, shadowed, or [`Decision::NotNeeded`] (no hit, the light
     /// behind the surface, or no diffuse reflectance). The map's, except on undecided pixels,
     /// where the shadow ray's answer replaces it.
-    pub occ: Vec<Vec<u8>>,
+    pub occ: Vec<Vec<Decision>>,
     /// Pixels decided by a shadow ray (borders after dilation; empty under `Shadows::Maps`).
     pub undecided: Vec<Vec<bool>>,
     /// The occluder hint of each pixel (a triangle id, or `EMPTY`).
@@ -508,10 +508,10 @@ impl Renderer<'_> {
                     for &(k, m) in &located {
                         let (j, s) = &tile[k];
                         let lk = c.classify_at(s.p, s.tri, m);
-                        if lk.decision == LIT {
+                        if lk.decision == Decision::Lit {
                             lit[j * stride + byte] |= bit;
                         }
-                        counts[l][usize::from(lk.decision != LIT)] += 1;
+                        counts[l][usize::from(lk.decision != Decision::Lit)] += 1;
                         if lk.map_border {
                             edge[j * stride + byte] |= bit;
                         }
@@ -876,9 +876,9 @@ impl Shadowing<'_> {
         let cls = classifiers(&self.maps, self.planes, r);
         let b = &self.bufs;
         let occ = per_light(nl, n, |i, l| match (b.faces.get(i, l), b.lit.get(i, l)) {
-            (false, _) => NONE,
-            (true, true) => LIT,
-            (true, false) => SHADOW,
+            (false, _) => Decision::NotNeeded,
+            (true, true) => Decision::Lit,
+            (true, false) => Decision::Shadow,
         });
         let flags = |bits: &LightBits| per_light(nl, n, |i, l| bits.get(i, l));
         let smerts = r.options.shadows == Shadows::Smerts;
@@ -921,6 +921,6 @@ impl Shadowing<'_> {
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);
         }
-        lk.decision == LIT
+        lk.decision == Decision::Lit
     }
 }

@@ -31,7 +31,6 @@
 //! `#[target_feature]` entry points ([`draw_all_avx2`], [`draw_all_avx512`]).
 
 use std::arch::x86_64::*;
-use std::mem::MaybeUninit;
 
 use crate::EMPTY_ID;
 use crate::edge::{BLOCK, EdgeFns, low_bits};
@@ -1119,7 +1118,7 @@ fn resolve_rows<const AVX512: bool>(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows
                     _mm256_storeu_si256(row_of(&mut zb.win, k).as_mut_ptr().cast(), empty.1);
                 } else {
                     let n = d.len();
-                    d.write_copy_of_slice(&zb.depth[k..k + n]);
+                    d.copy_from_slice(&zb.depth[k..k + n]);
                     let empty = f32::from_bits(zb.empty_bits());
                     zb.depth[k..k + n].fill(empty);
                     zb.win[k..k + n].fill(NONE);
@@ -1205,14 +1204,7 @@ fn dot_avx512(e: &[__m512d; 3], q: [__m512d; 3]) -> __m512d {
 /// integer edge functions at the pixel centre ([`edge_terms`]) and [`SetupTri::bary`]'s `f64`
 /// operations, in its order.
 #[inline(always)]
-fn resolve8_avx512(
-    zb: &ZBuffer,
-    k: usize,
-    x: u32,
-    y: u32,
-    id: &mut [MaybeUninit<u32>],
-    bary: &mut [MaybeUninit<[f32; 2]>],
-) {
+fn resolve8_avx512(zb: &ZBuffer, k: usize, x: u32, y: u32, id: &mut [u32], bary: &mut [[f32; 2]]) {
     let n = id.len();
     // SAFETY: see `Lanes` (only called from `resolve_avx512`); the loads read the 8 elements of
     // `win[k..k + 8]` (bounds-checked), the masked stores the first `n` elements of `id` and
@@ -1331,14 +1323,7 @@ fn bary4_avx2<const H: i32>(w: &Winners<__m256i, __m256>, live: __m256i, px: __m
 /// [`resolve8_avx512`] with AVX2: masks are vectors, and the `f64` work is done in two halves
 /// of 4 lanes ([`bary4_avx2`]).
 #[inline(always)]
-fn resolve8_avx2(
-    zb: &ZBuffer,
-    k: usize,
-    x: u32,
-    y: u32,
-    id: &mut [MaybeUninit<u32>],
-    bary: &mut [MaybeUninit<[f32; 2]>],
-) {
+fn resolve8_avx2(zb: &ZBuffer, k: usize, x: u32, y: u32, id: &mut [u32], bary: &mut [[f32; 2]]) {
     let n = id.len();
     // SAFETY: see `Lanes` (only called from `resolve_avx2`); the loads read the 8 elements of
     // `win[k..k + 8]` (bounds-checked), the stores 8 elements of arrays or of `id` and `bary`
@@ -1376,8 +1361,8 @@ fn resolve8_avx2(
         let mut ids = [0u32; 8];
         _mm256_storeu_si256(ids.as_mut_ptr().cast(), w.id);
         for j in 0..n {
-            id[j].write(ids[j]);
-            bary[j].write(pairs[j]);
+            id[j] = ids[j];
+            bary[j] = pairs[j];
         }
     }
 }

@@ -32,8 +32,6 @@
 //! comparisons. `depth_tie = 0` keeps the exact comparison, as a separate instance of every
 //! kernel (the const parameter `TIE`), so that it pays nothing for the window.
 
-use std::mem::MaybeUninit;
-
 use rayon::prelude::*;
 
 use crate::edge::{EdgeFns, cover_rect, row_mask};
@@ -262,7 +260,7 @@ impl<'a> ZBuffer<'a> {
             Isa::Scalar => {
                 let w = self.w;
                 for (r, d_row) in depth.into_iter().enumerate() {
-                    d_row.write_copy_of_slice(&self.depth[r * w..(r + 1) * w]);
+                    d_row.copy_from_slice(&self.depth[r * w..(r + 1) * w]);
                 }
                 self.resolve_scalar(id, bary);
             }
@@ -285,10 +283,10 @@ impl<'a> ZBuffer<'a> {
         for (r, i_row) in id.into_iter().enumerate() {
             let (zd, zw) = (&mut self.depth[r * w..(r + 1) * w], &mut self.win[r * w..(r + 1) * w]);
             if let Some(d_row) = depth.as_mut().and_then(Iterator::next) {
-                d_row.write_copy_of_slice(zd);
+                d_row.copy_from_slice(zd);
             }
             for (o, &win) in i_row.iter_mut().zip(&*zw) {
-                o.write(if win == NONE { EMPTY_ID } else { self.tris[win as usize].id });
+                *o = if win == NONE { EMPTY_ID } else { self.tris[win as usize].id };
             }
             zd.fill(empty);
             zw.fill(NONE);
@@ -309,11 +307,11 @@ impl<'a> ZBuffer<'a> {
                 let win = wins[c];
                 let end = c + wins[c..].iter().take_while(|&&v| v == win).count();
                 if win == NONE {
-                    i_row[c..end].iter_mut().for_each(|i| _ = i.write(EMPTY_ID));
-                    b_row[c..end].iter_mut().for_each(|b| _ = b.write([0.0; 2]));
+                    i_row[c..end].fill(EMPTY_ID);
+                    b_row[c..end].fill([0.0; 2]);
                 } else {
                     let tri = self.tris[win as usize];
-                    i_row[c..end].iter_mut().for_each(|i| _ = i.write(tri.id));
+                    i_row[c..end].fill(tri.id);
                     let ef = EdgeFns::new(tri);
                     let e = ef.at_pixel(tx0 + c as u32, ty0 + r as u32);
                     bary_run(tri, &ef, e, &mut b_row[c..end]);
@@ -325,7 +323,7 @@ impl<'a> ZBuffer<'a> {
 }
 
 /// The rows of one tile in a full-frame output buffer, not yet initialised.
-pub(crate) type Rows<'o, T> = Vec<&'o mut [MaybeUninit<T>]>;
+pub(crate) type Rows<'o, T> = Vec<&'o mut [T]>;
 
 /// `out[j] = tri.bary(e + j * ef.sx)`: the barycentrics of a run of covered pixels of one triangle,
 /// `e` the edge functions at the first.
@@ -334,9 +332,9 @@ pub(crate) type Rows<'o, T> = Vec<&'o mut [MaybeUninit<T>]>;
 /// core overlaps their divisions, which bound the cost. (A vector version, called per run, was no
 /// faster: most runs are a few pixels long.)
 #[inline(always)]
-fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [MaybeUninit<[f32; 2]>]) {
+fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [[f32; 2]]) {
     for b in out {
-        b.write(tri.bary(e));
+        *b = tri.bary(e);
         e = [e[0] + ef.sx[0], e[1] + ef.sx[1], e[2] + ef.sx[2]];
     }
 }
@@ -359,21 +357,22 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, is
     target.width = grid.width;
     target.height = grid.height;
     let Target { depth, id, bary: bary_buf, .. } = target;
-    // The buffers are written exactly once each, by the tile that owns the pixel, so they are
-    // not initialised first: a fill of 16 bytes per pixel would be a measurable part of the
-    // frame.
+    // The tile that owns a pixel writes it (every one, once), so the buffers need no clearing
+    // first: a fill of 16 bytes per pixel would be a measurable part of the frame. A buffer
+    // reused at the same size keeps its old values until overwritten; a new one comes zeroed
+    // from the allocator ([`fit`]).
     let (depth_len, bary_len) = (if out.depth { len } else { 0 }, if out.bary { len } else { 0 });
-    depth.clear_and_reserve(depth_len);
-    id.clear_and_reserve(len);
-    bary_buf.clear_and_reserve(bary_len);
+    fit(depth, depth_len, 0.0);
+    fit(id, len, 0);
+    fit(bary_buf, bary_len, [0.0; 2]);
     let depth_tiles: Vec<Option<Rows<f32>>> = if out.depth {
-        grid.split(&mut depth.spare_capacity_mut()[..len]).into_iter().map(Some).collect()
+        grid.split(&mut depth[..]).into_iter().map(Some).collect()
     } else {
         (0..grid.count()).map(|_| None).collect()
     };
-    let id_tiles = grid.split(&mut id.spare_capacity_mut()[..len]);
+    let id_tiles = grid.split(&mut id[..]);
     let bary_tiles: Vec<Option<Rows<[f32; 2]>>> = if out.bary {
-        grid.split(&mut bary_buf.spare_capacity_mut()[..len]).into_iter().map(Some).collect()
+        grid.split(&mut bary_buf[..]).into_iter().map(Some).collect()
     } else {
         (0..grid.count()).map(|_| None).collect()
     };
@@ -381,9 +380,9 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, is
         || (ZBuffer::default(), Vec::new()),
         |(zb, scratch), (t, ((depth, id), bary))| {
             if binned.tile_is_empty(t) {
-                depth.into_iter().flatten().flatten().for_each(|d| _ = d.write(empty_depth));
-                id.into_iter().flatten().for_each(|i| _ = i.write(EMPTY_ID));
-                bary.into_iter().flatten().flatten().for_each(|b| _ = b.write([0.0; 2]));
+                depth.into_iter().flatten().for_each(|d| d.fill(empty_depth));
+                id.into_iter().for_each(|i| i.fill(EMPTY_ID));
+                bary.into_iter().flatten().for_each(|b| b.fill([0.0; 2]));
                 return;
             }
             zb.reset(grid.rect(t), empty_depth, tie, binned.tile(t));
@@ -401,7 +400,7 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, is
                     let depth = depth.unwrap_or_else(|| {
                         let [x0, y0, x1, y1] = grid.rect(t);
                         let w = (x1 - x0) as usize;
-                        scratch.resize(w * (y1 - y0) as usize, MaybeUninit::uninit());
+                        scratch.resize(w * (y1 - y0) as usize, 0.0);
                         scratch.chunks_mut(w).collect()
                     });
                     zb.resolve(depth, id, bary, isa)
@@ -410,26 +409,16 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, is
             }
         },
     );
-    // SAFETY: the first `len` (`depth_len`, `bary_len` for the optional ones) elements of each
-    // buffer are initialised: `TileGrid::split` cuts them into the rows of the tiles, which
-    // partition the image (`tile` tests), and every tile writes every element of its rows, in
-    // the branch above or in `resolve` (whose runs cover each row) or `resolve_ids`.
-    unsafe {
-        depth.set_len(depth_len);
-        id.set_len(len);
-        bary_buf.set_len(bary_len);
-    }
 }
 
-/// `clear` then `reserve`, for the output buffers of any element type.
-trait Reserve {
-    fn clear_and_reserve(&mut self, len: usize);
-}
-
-impl<T> Reserve for Vec<T> {
-    fn clear_and_reserve(&mut self, len: usize) {
-        self.clear();
-        self.reserve(len);
+/// Gives `buf` exactly `len` elements, with no pass over those it already has: a reused buffer
+/// of the same size is left as it is, and an empty one is allocated zeroed (`vec!` of a zero
+/// value asks the allocator for zeroed pages instead of writing them).
+fn fit<T: Copy>(buf: &mut Vec<T>, len: usize, zero: T) {
+    if buf.is_empty() {
+        *buf = vec![zero; len];
+    } else {
+        buf.resize(len, zero);
     }
 }
 

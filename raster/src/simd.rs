@@ -1360,9 +1360,7 @@ fn resolve8_avx2(zb: &ZBuffer, k: usize, x: u32, y: u32, id: &mut [u32], bary: &
         _mm256_storeu_ps(pairs[4..].as_mut_ptr().cast(), hi);
         let mut ids = [0u32; 8];
         _mm256_storeu_si256(ids.as_mut_ptr().cast(), w.id);
-        for j in 0..n {
-            id[j] = ids[j];
-            bary[j] = pairs[j];
-        }
+        id[..n].copy_from_slice(&ids[..n]);
+        bary[..n].copy_from_slice(&pairs[..n]);
     }
 }

@@ -18,7 +18,7 @@
 //! alive at once; so compare two combinations by their speed-ups rather than their times.
 //!
 //! Error: PSNR of display luminance ([`crate::measure::psnr`]), the mean FLIP error
-//! ([`hyrt::metrics::flip_mean`]), and wrong-visibility pixels and (pixel, light) pairs. The
+//! ([`crate::flip::flip_mean`]), and wrong-visibility pixels and (pixel, light) pairs. The
 //! Pareto front ([`crate::plot::pareto_front`]) is over (median frame ms, PSNR), both rounded to
 //! the 3 decimals the CSV shows, so it can be recomputed from the CSV exactly.
 //!

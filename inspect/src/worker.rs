@@ -55,7 +55,7 @@ pub struct Loaded {
     pub scene: Arc<Scene>,
     /// Plane of every triangle: for re-classifying a picked pixel exactly as the renderer does.
     pub planes: Arc<Vec<Plane>>,
-    /// The renderer's bound on a shading point's rounding ([`Renderer::point_error`]).
+    /// The renderer's bound on a shading point's rounding ([`Renderer::occluders`]).
     pub point_error: f32,
     /// The options the flags selected: the knobs' starting values.
     pub options: Options,

@@ -49,8 +49,8 @@ impl Affine {
     pub fn apply_triangles(&self, tris: &[[Vec3; 3]], out: &mut [[Vec4; 3]]) {
         assert_eq!(tris.len(), out.len(), "one output per triangle");
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F.
+        if hyrt_simd::Isa::best().tier() == hyrt_simd::Tier::Avx512 {
+            // SAFETY: the AVX-512 tier (which includes AVX-512F) was detected.
             unsafe { self.apply_triangles_avx512(tris, out) };
             return;
         }

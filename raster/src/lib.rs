@@ -81,19 +81,21 @@
 //! * `affine.rs`: [`Affine`] maps to clip space, with a vector kernel for whole triangles (for
 //!   callers);
 //! * `clip.rs`: homogeneous clipping (near, far, guard band), barycentrics carried as attributes;
-//! * `setup.rs`: viewport transform, fixed-point snapping and ranges, facing, interpolation
+//! * `setup/mod.rs`: viewport transform, fixed-point snapping and ranges, facing, interpolation
 //!   constants (the unsnapped depth plane and its clamp range, perspective-correct barycentrics);
 //! * `edge.rs`: edge functions, top-left fill rule, 8x8 block rejection/acceptance;
-//! * `setup_simd.rs`: the same setup for 8 triangles at a time with AVX2 or AVX-512;
+//! * `setup/vector.rs`: the same setup for 8 triangles at a time with AVX2 or AVX-512;
 //! * `tile.rs`: parallel setup and binning (of slices, or of each chunk made by a
 //!   [`TriangleSource`] on the thread that sets it up), tiles as disjoint parts of the output
 //!   buffers;
-//! * `zbuf.rs`: the per-tile depth test (with the tie window), and barycentrics computed once per
+//! * `zbuf/mod.rs`: the per-tile depth test (with the tie window), and barycentrics computed once per
 //!   pixel for the winning triangle;
-//! * `simd.rs`: the same depth test and barycentrics on 8 pixels at a time with AVX2 or AVX-512.
+//! * `zbuf/vector.rs`: the same depth test and barycentrics on 8 pixels at a time with AVX2 or
+//!   AVX-512.
 //!
-//! The vector kernels are chosen at run time (x86-64 only; the scalar ones are used elsewhere);
-//! results are bit-identical whatever the kernel (tests compare them).
+//! The vector kernels are chosen at run time by the tier `hyrt_simd::Isa::best` detects (x86-64
+//! only; the scalar ones are used elsewhere); results are bit-identical whatever the kernel
+//! (tests compare them).
 //!
 //! # Performance notes
 //!
@@ -107,10 +109,6 @@ mod affine;
 mod clip;
 mod edge;
 mod setup;
-#[cfg(target_arch = "x86_64")]
-mod setup_simd;
-#[cfg(target_arch = "x86_64")]
-mod simd;
 mod tile;
 mod zbuf;
 
@@ -412,7 +410,7 @@ impl Rasterizer {
             return;
         }
         let ctx = SetupContext::new(width, height, opts.cull_backfaces);
-        let isa = zbuf::Isa::detect();
+        let isa = zbuf::Isa::best();
         let submitted = input.len();
         let binned = tile::Binned::new(&mut self.chunks, input, &ctx, opts.tile_size, isa);
         (self.submitted, self.used_chunks) = (submitted, binned.chunk_count());
@@ -441,7 +439,7 @@ pub fn coverage_count(tris: &[[Vec4; 3]], width: u32, height: u32, opts: &Raster
     let ctx = SetupContext::new(width, height, opts.cull_backfaces);
     let mut chunks = Vec::new();
     let input = tile::Input::Slice { tris, ids: None };
-    let binned = tile::Binned::new(&mut chunks, input, &ctx, opts.tile_size, zbuf::Isa::detect());
+    let binned = tile::Binned::new(&mut chunks, input, &ctx, opts.tile_size, zbuf::Isa::best());
     let grid = binned.grid;
     let mut count = vec![0u32; width as usize * height as usize];
     grid.split(&mut count).into_par_iter().enumerate().for_each(|(t, mut rows)| {

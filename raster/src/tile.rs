@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use crate::TriangleSource;
 use crate::edge::BLOCK;
 use crate::setup::{SetupContext, SetupTri, setup_chunk};
-use crate::zbuf::Isa;
+use crate::zbuf::{Isa, Tier};
 
 use glam::Vec4;
 
@@ -128,14 +128,14 @@ impl Chunk {
         let out = &mut self.tris;
         out.clear();
         out.reserve(input.len());
-        match isa {
-            Isa::Scalar => setup_chunk(input, ids, ctx, out),
+        match isa.tier() {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
-            Isa::Avx2 => unsafe { crate::setup_simd::setup_chunk_avx2(input, ids, ctx, out) },
+            // SAFETY: an `Isa` of the AVX2 tier exists only where the CPU runs it.
+            Tier::Avx2 => unsafe { crate::setup::vector::setup_chunk_avx2(input, ids, ctx, out) },
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
-            Isa::Avx512 => unsafe { crate::setup_simd::setup_chunk_avx512(input, ids, ctx, out) },
+            // SAFETY: an `Isa` of the AVX-512 tier exists only where the CPU runs it.
+            Tier::Avx512 => unsafe { crate::setup::vector::setup_chunk_avx512(input, ids, ctx, out) },
+            _ => setup_chunk(input, ids, ctx, out),
         }
     }
 

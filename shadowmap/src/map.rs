@@ -591,7 +591,7 @@ impl LightMap {
 
     /// The one triangle that the texels `[x0, x1] x [y0, y1]` of `face` see: `Some(EMPTY)` if
     /// none, `Some(id)` if every texel holds `id` or nothing, `None` if two triangles or more
-    /// may be seen (the answer is conservative: it reads whole [`REGION`] blocks). A face that
+    /// may be seen (the answer is conservative: it reads whole `REGION` blocks). A face that
     /// was not drawn sees nothing, as its texel lookups say.
     pub fn region_id(&self, face: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
         let f = self.faces.get(usize::from(face))?;

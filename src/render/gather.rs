@@ -4,7 +4,7 @@
 //! It is the inner loop of indirect light (points times VPLs), so it is laid out for it: the
 //! points in struct-of-arrays order ([`Points`]), one VPL's constants broadcast
 //! ([`VplConsts`]), and sixteen points at a time with AVX-512, or eight with AVX2 and F16C,
-//! where the CPU has them ([`Kernel`]). The scalar [`pair`] performs the same `f32` operations
+//! where the CPU has them ([`Isa`]). The scalar [`pair`] performs the same `f32` operations
 //! in the same order (no fused multiply-adds, IEEE square roots and divisions, exact
 //! half-float conversions), so all give the same bytes; the tests hold them to it.
 //!
@@ -16,6 +16,7 @@
 
 use glam::Vec3;
 use hyrt_shadowmap::vpl_map::VplMap;
+use hyrt_simd::{Isa, Tier};
 
 use super::{SurfaceHit, vpl::Vpl};
 
@@ -231,74 +232,37 @@ pub(crate) fn pair_bilinear(c: &VplConsts, map: &VplMap, p: Vec3, ns: Vec3, ng: 
 }
 
 /// Adds VPL `c`'s `I_v g_v` (visible pairs only) to `sums` for every point of `pts`, with the
-/// widest kernel the CPU has ([`Kernel::best`]).
+/// widest kernel the CPU runs ([`Isa::best`]).
 pub(crate) fn add_vpl(c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
-    add_vpl_on(Kernel::best(), c, map, pts, sums);
+    add_vpl_on(Isa::best(), c, map, pts, sums);
 }
 
-/// The ways to run [`add_vpl`]; all give the same bits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Kernel {
-    Scalar,
-    /// Eight pairs per vector (AVX2 and F16C).
-    Avx2,
-    /// Sixteen pairs per vector (AVX-512F).
-    Avx512,
-}
-
-impl Kernel {
-    /// The kernels this CPU can run, narrowest first.
-    pub fn available() -> Vec<Kernel> {
-        let mut k = vec![Kernel::Scalar];
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") && has!("f16c") {
-                k.push(Kernel::Avx2);
-            }
-            if has!("avx512f") {
-                k.push(Kernel::Avx512);
-            }
-        }
-        k
-    }
-
-    /// The widest of [`Kernel::available`] (detected once).
-    pub fn best() -> Kernel {
-        static BEST: std::sync::OnceLock<Kernel> = std::sync::OnceLock::new();
-        *BEST.get_or_init(|| *Kernel::available().last().expect("the scalar kernel is always there"))
-    }
-}
-
-/// [`add_vpl`] with kernel `k`: whole vectors with it, the rest one point at a time.
-///
-/// # Panics
-/// If this CPU cannot run `k` (not in [`Kernel::available`]).
-pub(crate) fn add_vpl_on(k: Kernel, c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
-    assert!(k == Kernel::Scalar || Kernel::available().contains(&k), "{k:?} is not available on this CPU");
+/// [`add_vpl`] with the kernel of tier `isa` (8 pairs per AVX2 vector, 16 per AVX-512 one; all
+/// give the same bits): whole vectors with it, the rest one point at a time.
+pub(crate) fn add_vpl_on(isa: Isa, c: &VplConsts, map: &VplMap, pts: &Points, sums: &mut Sums) {
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
     {
         let (planes, depths) = (map.planes(), map.depths());
-        // SAFETY: the kernel's features are present (asserted above); the kernels' loads stay
+        // SAFETY: an `Isa` of a tier exists only where the CPU runs it; the kernels' loads stay
         // within the first `done` points of `pts` and `sums` (asserted there) and their gathers
         // within the map's texels (indices clamped to the resolution; see each kernel).
         unsafe {
-            match (k, planes, depths) {
-                (Kernel::Avx512, Some(g), _) => {
+            match (isa.tier(), planes, depths) {
+                (Tier::Avx512, Some(g), _) => {
                     done = pts.len() / avx512::LANES * avx512::LANES;
                     avx512::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
                 }
-                (Kernel::Avx512, _, Some((bits, _))) => {
+                (Tier::Avx512, _, Some((bits, _))) => {
                     done = pts.len() / avx512::LANES * avx512::LANES;
                     avx512::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
                 }
-                (Kernel::Avx2, Some(g), _) => {
+                (Tier::Avx2, Some(g), _) => {
                     done = pts.len() / LANES * LANES;
                     avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
                 }
-                (Kernel::Avx2, _, Some((bits, _))) => {
+                (Tier::Avx2, _, Some((bits, _))) => {
                     done = pts.len() / LANES * LANES;
                     avx2::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
                 }
@@ -719,7 +683,7 @@ mod tests {
             for _ in 0..3 {
                 add_vpl_with(pair, &c, &map, &pts, &mut b);
             }
-            for k in Kernel::available() {
+            for k in Isa::for_tests("VPL gather kernels") {
                 let mut a = Sums::default();
                 a.reset(pts.len());
                 for _ in 0..3 {
@@ -729,11 +693,6 @@ mod tests {
             }
             let nonzero = (0..pts.len()).filter(|&i| b.get(i) != Vec3::ZERO).count();
             assert!(nonzero > 100 && nonzero < 900, "{format:?}: {nonzero}: the points must mix lit and not");
-        }
-        for k in [Kernel::Avx2, Kernel::Avx512] {
-            if !Kernel::available().contains(&k) {
-                eprintln!("{k:?} is not available on this CPU: its kernel was not tested");
-            }
         }
     }
 }

@@ -22,6 +22,7 @@
 //! test, never a different answer.
 
 use glam::Vec3;
+use hyrt_simd::{Isa, Tier};
 
 use crate::{Hit, Ray, Tracer, triangle::gamma};
 
@@ -64,47 +65,12 @@ impl RowRays {
     }
 }
 
-/// An implementation of [`Tracer::hits_on_row_with`]. All give bit-identical results.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kernel {
-    /// One lane at a time with [`Tracer::hit_on_plane`]: the reference, on every machine.
-    Scalar,
-    /// 8 lanes (x86-64 with AVX2).
-    Avx2,
-    /// 16 lanes (x86-64 with AVX-512F). Valgrind cannot run it; it reports no AVX-512 to
-    /// programs it runs, so [`Kernel::best`] picks AVX2 there.
-    Avx512,
-}
-
-impl Kernel {
-    /// Every kernel, slowest first.
-    pub const ALL: [Kernel; 3] = [Kernel::Scalar, Kernel::Avx2, Kernel::Avx512];
-
-    /// True when this machine can run the kernel.
-    pub fn is_available(self) -> bool {
-        match self {
-            Kernel::Scalar => true,
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
-            #[cfg(not(target_arch = "x86_64"))]
-            _ => false,
-        }
-    }
-
-    /// The fastest kernel this machine can run (the feature test is a cached atomic load).
-    pub fn best() -> Kernel {
-        Kernel::ALL.into_iter().rev().find(|k| k.is_available()).unwrap_or(Kernel::Scalar)
-    }
-}
-
 /// Vertex data is gathered with 32-bit indices `9 id + k` (three `Vec3` per triangle).
 const MAX_VECTOR_TRIS: usize = (i32::MAX as usize - 8) / 9;
 
 impl Tracer {
     /// `out[i] = self.hit_on_plane(ids[i], &rays.ray(x0 + i))` for every `i`, bit for bit, with
-    /// the fastest [`Kernel`] available. Returns the number of lanes whose id is a triangle
+    /// the widest kernel this CPU runs ([`Isa::best`]). Returns the number of lanes whose id is a triangle
     /// (`< triangle_count()`) but whose result is `None` (a ray parallel to the plane, or the
     /// plane behind the origin): the lanes a caller may want to resolve otherwise. Lanes with
     /// any other id get `None` and are not counted.
@@ -112,23 +78,24 @@ impl Tracer {
     /// # Panics
     /// If `ids` and `out` differ in length.
     pub fn hits_on_row(&self, rays: &RowRays, x0: u32, ids: &[u32], out: &mut [Option<Hit>]) -> usize {
-        self.hits_on_row_with(Kernel::best(), rays, x0, ids, out)
+        self.hits_on_row_with(Isa::best(), rays, x0, ids, out)
     }
 
-    /// [`Tracer::hits_on_row`] with a chosen kernel (for tests and benchmarks).
+    /// [`Tracer::hits_on_row`] with the kernel of tier `isa` (for tests and benchmarks). All
+    /// tiers give bit-identical results; the scalar one is [`Tracer::hit_on_plane`] lane by
+    /// lane.
     ///
     /// # Panics
-    /// If `ids` and `out` differ in length, or the machine cannot run `kernel`.
+    /// If `ids` and `out` differ in length.
     pub fn hits_on_row_with(
         &self,
-        kernel: Kernel,
+        isa: Isa,
         rays: &RowRays,
         x0: u32,
         ids: &[u32],
         out: &mut [Option<Hit>],
     ) -> usize {
         assert_eq!(ids.len(), out.len(), "one output per id");
-        assert!(kernel.is_available(), "{kernel:?} is not available on this machine");
         // The vector kernels convert columns with signed 32-bit conversions, exact below 2^24
         // as `x as f32` is; a non-finite origin makes every lane `None`, which the scalar path
         // answers at once.
@@ -136,13 +103,14 @@ impl Tracer {
             && self.by_id.len() <= MAX_VECTOR_TRIS
             && rays.origin.is_finite()
             && x0 as u64 + ids.len() as u64 <= 1 << 24;
-        match kernel {
+        match isa.tier() {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `is_available` checked AVX2 above.
-            Kernel::Avx2 if vector => unsafe { x86::row_avx2(self, rays, x0, ids, out) },
+            // SAFETY: an `Isa` of the AVX2 tier exists only where the CPU runs it.
+            Tier::Avx2 if vector => unsafe { x86::row_avx2(self, rays, x0, ids, out) },
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `is_available` checked AVX-512F above.
-            Kernel::Avx512 if vector => unsafe { x86::row_avx512(self, rays, x0, ids, out) },
+            // SAFETY: an `Isa` of the AVX-512 tier (which includes AVX-512F) exists only where
+            // the CPU runs it.
+            Tier::Avx512 if vector => unsafe { x86::row_avx512(self, rays, x0, ids, out) },
             _ => self.row_scalar(rays, x0, ids, out),
         }
     }

@@ -45,8 +45,9 @@ use obvhs::{
     triangle::Triangle,
 };
 
-pub use batch::{Kernel, RowRays};
+pub use batch::RowRays;
 pub use counts::{RayCounts, RayKind};
+pub use hyrt_simd::{Isa, Tier};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
 pub use orient::{PlaneSide, plane_side};
 pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle};

@@ -3,7 +3,7 @@
 //! can run, on random and on adversarial rays and triangles.
 
 use glam::{Vec3, vec3};
-use hyrt_tracer::{Hit, Kernel, RowRays, Tracer};
+use hyrt_tracer::{Hit, Isa, RowRays, Tracer};
 
 /// xorshift64*: deterministic, no dependencies.
 struct Rng(u64);
@@ -53,7 +53,7 @@ fn check(tracer: &Tracer, rays: &RowRays, x0: u32, ids: &[u32], seen: &mut Seen)
         .map(|(x, &id)| if (id as usize) < n { tracer.hit_on_plane(id, &rays.ray(x)) } else { None })
         .collect();
     let misses = ids.iter().zip(&reference).filter(|(id, h)| (**id as usize) < n && h.is_none()).count();
-    for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+    for kernel in Isa::available() {
         // Stale values in `out` must not leak into the result.
         let mut out = vec![Some(Hit { t: -1.0, tri: 7, bary: [9.0; 3] }); ids.len()];
         let m = tracer.hits_on_row_with(kernel, rays, x0, ids, &mut out);
@@ -75,11 +75,7 @@ fn check(tracer: &Tracer, rays: &RowRays, x0: u32, ids: &[u32], seen: &mut Seen)
 }
 
 fn kernels_note() {
-    for k in Kernel::ALL {
-        if !k.is_available() {
-            eprintln!("note: {k:?} is not available here and was not tested");
-        }
-    }
+    Isa::for_tests("row kernels");
 }
 
 /// An n x n grid of quads in the plane z = 0 over [0, n]^2, two triangles each.

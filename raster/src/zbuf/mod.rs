@@ -18,7 +18,7 @@
 //! # Vector kernel
 //!
 //! On x86-64 CPUs with AVX2 or AVX-512 (detected at run time), the coverage tests and the depth
-//! test work on 8 pixels at once (`crate::simd`), computing exactly what the scalar kernel
+//! test work on 8 pixels at once (`vector`), computing exactly what the scalar kernel
 //! [`ZBuffer::draw_scalar`] computes, and so does the resolve. The vector resolve also empties
 //! the z-buffer as it reads it ([`ZBuffer::clean`]), so that the worker's next tile starts
 //! without a fill.
@@ -31,6 +31,9 @@
 //! therefore decide the (rare) ties separately, lane by lane, and the rest with vector
 //! comparisons. `depth_tie = 0` keeps the exact comparison, as a separate instance of every
 //! kernel (the const parameter `TIE`), so that it pays nothing for the window.
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod vector;
 
 use rayon::prelude::*;
 
@@ -53,52 +56,7 @@ pub(crate) fn clip_to_tile([x0, y0, x1, y1]: [u32; 4], [bx0, by0, bx1, by1]: [u3
     [x0.max(bx0), y0.max(by0), x1.min(bx1 + 1), y1.min(by1 + 1)]
 }
 
-/// Instruction set of the kernel, chosen once per call.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Isa {
-    Scalar,
-    /// Only constructed when the CPU has AVX2 (see [`Isa::detect`]).
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    /// Only constructed when the CPU has AVX2, AVX-512 F, DQ and VL.
-    #[cfg(target_arch = "x86_64")]
-    Avx512,
-}
-
-impl Isa {
-    /// The kernels this CPU runs, fastest first (always ending with [`Isa::Scalar`]).
-    #[cfg(test)]
-    pub fn available() -> Vec<Self> {
-        let mut isas = Vec::new();
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") {
-                if has!("avx512f") && has!("avx512dq") && has!("avx512vl") {
-                    isas.push(Isa::Avx512);
-                }
-                isas.push(Isa::Avx2);
-            }
-        }
-        isas.push(Isa::Scalar);
-        isas
-    }
-
-    /// The fastest kernel this CPU runs.
-    pub fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") {
-                if has!("avx512f") && has!("avx512dq") && has!("avx512vl") {
-                    return Isa::Avx512;
-                }
-                return Isa::Avx2;
-            }
-        }
-        Isa::Scalar
-    }
-}
+pub(crate) use hyrt_simd::{Isa, Tier};
 
 /// The z-buffer of one tile. Kept per worker and reused across tiles.
 #[derive(Default)]
@@ -206,14 +164,14 @@ impl<'a> ZBuffer<'a> {
 
     /// Depth-tests every triangle of the tile.
     fn draw_all<const REVERSED: bool, const TIE: bool>(&mut self, isa: Isa) {
-        match isa {
-            Isa::Scalar => (0..self.tris.len() as u32).for_each(|i| self.draw_scalar::<REVERSED, TIE>(i)),
+        match isa.tier() {
+            Tier::Scalar => (0..self.tris.len() as u32).for_each(|i| self.draw_scalar::<REVERSED, TIE>(i)),
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
-            Isa::Avx2 => unsafe { crate::simd::draw_all_avx2::<REVERSED, TIE>(self) },
+            // SAFETY: an `Isa` of the AVX2 tier exists only where the CPU runs it.
+            Tier::Avx2 => unsafe { crate::zbuf::vector::draw_all_avx2::<REVERSED, TIE>(self) },
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
-            Isa::Avx512 => unsafe { crate::simd::draw_all_avx512::<REVERSED, TIE>(self) },
+            // SAFETY: an `Isa` of the AVX-512 tier exists only where the CPU runs it.
+            Tier::Avx512 => unsafe { crate::zbuf::vector::draw_all_avx512::<REVERSED, TIE>(self) },
         }
     }
 
@@ -256,20 +214,20 @@ impl<'a> ZBuffer<'a> {
     ///
     /// The vector kernels also empty the z-buffer as they go (see [`ZBuffer::clean`]).
     fn resolve(&mut self, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>, isa: Isa) {
-        match isa {
-            Isa::Scalar => {
+        match isa.tier() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: an `Isa` of the AVX2 tier exists only where the CPU runs it.
+            Tier::Avx2 => unsafe { crate::zbuf::vector::resolve_avx2(self, depth, id, bary) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: an `Isa` of the AVX-512 tier exists only where the CPU runs it.
+            Tier::Avx512 => unsafe { crate::zbuf::vector::resolve_avx512(self, depth, id, bary) },
+            _ => {
                 let w = self.w;
                 for (r, d_row) in depth.into_iter().enumerate() {
                     d_row.copy_from_slice(&self.depth[r * w..(r + 1) * w]);
                 }
                 self.resolve_scalar(id, bary);
             }
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2` is only constructed when the CPU has AVX2.
-            Isa::Avx2 => unsafe { crate::simd::resolve_avx2(self, depth, id, bary) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx512` is only constructed when the CPU has these features.
-            Isa::Avx512 => unsafe { crate::simd::resolve_avx512(self, depth, id, bary) },
         }
     }
 
@@ -511,13 +469,13 @@ mod tests {
     #[test]
     fn every_kernel_gives_identical_buffers() {
         let (tris, ids) = scene();
-        let isas = Isa::available();
-        assert_eq!(isas.first().copied(), Some(Isa::detect()));
+        let isas = Isa::for_tests("z-buffer kernels");
+        assert_eq!(isas.last().copied(), Some(Isa::best()));
         for reversed in [false, true] {
-            let exact = bits(&render_with(Isa::Scalar, &tris, &ids, reversed, 0.0, 64));
+            let exact = bits(&render_with(Isa::SCALAR, &tris, &ids, reversed, 0.0, 64));
             for tie in [0.0, 1.0 / 65536.0, 1e-2] {
                 for tile in [8, 64, 200] {
-                    let reference = render_with(Isa::Scalar, &tris, &ids, reversed, tie, tile);
+                    let reference = render_with(Isa::SCALAR, &tris, &ids, reversed, tie, tile);
                     assert!(reference.id.iter().filter(|&&id| id != EMPTY_ID).count() > 10_000);
                     let reference = bits(&reference);
                     // Not vacuous: the window changes some winners.

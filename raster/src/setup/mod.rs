@@ -85,6 +85,9 @@
 //! corrections are dropped (`z_i = D_i`: the plane through the snapped vertices, which is what
 //! GPUs interpolate), so that all values stay finite and bounded.
 
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod vector;
+
 use glam::{DVec2, DVec4, Vec4};
 
 use crate::clip::{ClipScratch, Clipped, GuardBand, MAX_POLY_VERTS, clip_triangle};
@@ -141,7 +144,7 @@ pub(crate) struct SetupTri {
 
 impl SetupTri {
     /// A set-up triangle from its fields (see the struct), for the vector kernels of
-    /// `crate::setup_simd`, which compute them as [`setup_triangle`] does.
+    /// `crate::setup::vector`, which compute them as [`setup_triangle`] does.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub(crate) fn from_parts(
@@ -420,7 +423,7 @@ fn classify(tri: &[Vec4; 3]) -> Class {
 /// Sets up the triangles of `tris` (`tris[k]` with id `ids[k]`, or 0 for all without `ids`;
 /// those with id [`EMPTY_ID`](crate::EMPTY_ID) are skipped), appending to `out` in input order
 /// exactly what [`setup_triangle`] appends for each in turn. The vector kernels
-/// (`crate::setup_simd`) do the same 8 triangles at a time.
+/// (`crate::setup::vector`) do the same 8 triangles at a time.
 pub(crate) fn setup_chunk(
     tris: &[[Vec4; 3]],
     ids: Option<&[u32]>,
@@ -593,7 +596,7 @@ fn setup_unclipped(tri: &[DVec4; 3], id: u32, ctx: &SetupContext, out: &mut Vec<
 
 /// Fixed-point extent below which a triangle can count as tiny for [`misses_every_sample`]:
 /// `2^14` units (64 pixels), small enough for the vector setup to evaluate its edge functions
-/// in `i32` (`crate::setup_simd`).
+/// in `i32` (`crate::setup::vector`).
 pub(crate) const TINY_SPAN: i32 = 1 << 14;
 
 /// Whether a set-up triangle is tiny, its pixel bounds at most 2 x 2 pixels and its vertices

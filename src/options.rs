@@ -13,7 +13,6 @@
 
 use serde_json::Value;
 
-pub use crate::render::vpl::VplOptions;
 pub use hyrt_shadowmap::{MapKind, MapOptions, vpl_map::VplFormat};
 
 /// An enum knob: its values, in menu order, and each one's name on the command line, in the
@@ -131,6 +130,23 @@ choice! {
     }
 }
 
+/// How VPLs are generated ([`crate::render::vpl`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VplOptions {
+    /// Number of light paths, over all lights (each path leaves up to `bounces` VPLs).
+    pub paths: u32,
+    /// Diffuse bounces per path, each leaving a VPL.
+    pub bounces: u32,
+    /// Offset into the Halton sequence (another set of VPLs for another seed).
+    pub seed: u32,
+}
+
+impl Default for VplOptions {
+    fn default() -> Self {
+        Self { paths: 45, bounces: 1, seed: 0 }
+    }
+}
+
 choice! {
     /// [`IndirectOptions::filter`].
     #[derive(Default)]
@@ -156,7 +172,7 @@ pub struct IndirectOptions {
     pub bias: f32,
     /// Interleaved sampling: each pixel of a `k x k` pattern evaluates a `1 / k^2` subset of
     /// the VPLs, then a geometry-aware filter reconstructs (see
-    /// [`crate::render::indirect`]); 1 = off.
+    /// `hyrt::render::indirect`); 1 = off.
     pub interleave: u32,
     /// How a VPL map decides visibility: the texel under the point (the thesis), or the 2x2
     /// texels around it, bilinearly weighted.
@@ -261,7 +277,7 @@ pub struct Options {
     /// (not counted in the frame's rays) and count the decisions it contradicts
     /// (`FrameStats::lights[l].wrong`).
     pub check_visibility: bool,
-    /// Return the per-pixel shadow buffers in [`crate::render::Frame::shadows`] (for
+    /// Return the per-pixel shadow buffers in `Frame::shadows` (for
     /// inspection); otherwise the renderer keeps them for the next frame.
     pub keep_buffers: bool,
 }

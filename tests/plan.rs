@@ -7,7 +7,7 @@ mod common;
 use common::floor_scene;
 use glam::{Vec3, vec3};
 use hyrt::{
-    plan::FrameDecision,
+    render::FrameDecision,
     render::{Indirect, Options, Pass, Renderer},
     scene::{IndirectSettings, PointLight, Scene},
 };

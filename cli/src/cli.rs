@@ -187,7 +187,7 @@ fn render(a: &RenderArgs) -> Result<()> {
     let (bvh_ms, raster) = (renderer.bvh_build_ms(), renderer.raster_stats());
     let vs = if a.vs_reference { Some(vs_reference(&mut renderer, &frame.film, a.quiet)?) } else { None };
 
-    say(format!("this frame:\n{}", hyrt::plan::format_decisions(&frame.stats.decisions).trim_end()));
+    say(format!("this frame:\n{}", hyrt::render::format_decisions(&frame.stats.decisions).trim_end()));
     let r = &frame.stats.rays;
     let times: Vec<String> = frame.stats.time_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
     say(format!(
@@ -381,7 +381,7 @@ fn plan(a: &PlanArgs) -> Result<()> {
         let r = &s.rays;
         println!("frame {} (eye {}):", i + 1, vec3_text(c.eye));
         println!("  passes run: {}", passes(s).join(", "));
-        print!("{}", hyrt::plan::format_decisions(&s.decisions));
+        print!("{}", hyrt::render::format_decisions(&s.decisions));
         println!(
             "  rays: primary {} shadow {} specular {} vpl_shadow {} vpl_path {}; light maps built {}",
             r.primary, r.shadow, r.specular, r.vpl_shadow, r.vpl_path, s.maps_built

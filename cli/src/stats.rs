@@ -26,7 +26,7 @@ pub struct RenderStats<'a> {
     pub shadow_lights: Vec<hyrt::render::shadows::LightStats>,
     /// What the frame rebuilt or reused (BVH, light maps, VPLs), and per light whether it
     /// needed a map and rays at all.
-    pub frame_decisions: Vec<hyrt::plan::FrameDecision>,
+    pub frame_decisions: Vec<hyrt::render::FrameDecision>,
     /// Light maps built for this frame (0: all cached).
     pub maps_built: u32,
     /// With indirect light: the VPLs and the memory of their maps.

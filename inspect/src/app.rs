@@ -11,7 +11,7 @@ use eframe::egui::{
 };
 use glam::Vec3 as V3;
 use hyrt::options::{Choice, Indirect, IndirectOptions, Options, Shadows};
-use hyrt::plan::FrameDecision;
+use hyrt::render::FrameDecision;
 use hyrt::render::{
     Pass,
     shadows::{RAY_HINT, RAY_TRAVERSAL},

@@ -23,7 +23,8 @@ use eframe::egui::ColorImage;
 use hyrt::{
     camera::CameraRays,
     film::Film,
-    plan::{FrameDecision, Plan},
+    plan::Plan,
+    render::FrameDecision,
     render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, vpl::Vpl},
     scene::{Camera, PointLight, Scene},
 };

@@ -14,7 +14,7 @@ use hyrt_shadowmap::vpl_map::VplMap;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
-use crate::plan::FrameDecision;
+use crate::render::FrameDecision;
 
 use super::gather::{self, Points, ShadePoint, Sums, VplConsts};
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};

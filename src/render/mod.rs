@@ -15,10 +15,10 @@
 //! of [`Options`], never two renderers. Which passes run is decided by the [`Plan`].
 
 pub mod cull;
+mod decision;
 pub mod direct;
 mod gather;
 pub mod indirect;
-pub mod pass;
 mod pixel_rays;
 pub mod shadows;
 pub mod specular;
@@ -32,7 +32,8 @@ use glam::Vec3;
 use hyrt_tracer::{Hit, Ray, RayCounts, Tracer};
 use rayon::prelude::*;
 
-pub use pass::Pass;
+pub use crate::plan::Pass;
+pub use decision::{FrameDecision, format_decisions};
 pub use surface::SurfaceHit;
 
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
@@ -57,7 +58,7 @@ pub struct FrameStats {
     /// excluded).
     pub time_ms: BTreeMap<&'static str, f64>,
     /// What this frame rebuilt or reused, and the per-light decisions of map-based shadows.
-    pub decisions: Vec<crate::plan::FrameDecision>,
+    pub decisions: Vec<crate::render::FrameDecision>,
 }
 
 impl FrameStats {
@@ -325,7 +326,7 @@ impl<'a> Renderer<'a> {
         let (w, h) = (self.scene.settings.width, self.scene.settings.height);
         let n = w as usize * h as usize;
 
-        stats.decisions.push(crate::plan::FrameDecision::new(
+        stats.decisions.push(crate::render::FrameDecision::new(
             "bvh",
             false,
             format!("reused: built once for the scene ({:.1} ms), which is unchanged", self.bvh_build_ms()),

@@ -42,7 +42,7 @@ use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit};
 
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
-use crate::{plan::FrameDecision, scene::PointLight};
+use crate::{render::FrameDecision, scene::PointLight};
 
 /// Whether `light` can light `hit` at all (a light with some intensity, strictly in front of
 /// the surface's plane and of its shading normal, not at the point): the condition under which

@@ -46,22 +46,7 @@ pub struct Vpl {
     pub light: u32,
 }
 
-/// How VPLs are generated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VplOptions {
-    /// Number of light paths, over all lights (each path leaves up to `bounces` VPLs).
-    pub paths: u32,
-    /// Diffuse bounces per path, each leaving a VPL.
-    pub bounces: u32,
-    /// Offset into the Halton sequence (another set of VPLs for another seed).
-    pub seed: u32,
-}
-
-impl Default for VplOptions {
-    fn default() -> Self {
-        Self { paths: 45, bounces: 1, seed: 0 }
-    }
-}
+pub use crate::options::VplOptions;
 
 /// Radical inverse of `i` in base `b` (the Halton sequence's coordinate).
 fn radical_inverse(mut i: u64, b: u64) -> f32 {

@@ -1,7 +1,7 @@
 //! The passes of a frame: one name per pass, written here once.
 //!
 //! The plan gates passes by this type ([`crate::plan::Plan::runs`]), the frame records their
-//! times by it ([`super::FrameStats::record`]), and the CLI's statistics, `hyrt bench` and the
+//! times by it ([`crate::render::FrameStats::record`]), and the CLI's statistics, `hyrt bench` and the
 //! inspector list them in [`Pass::ALL`]'s order under [`Pass::name`].
 
 use serde::{Serialize, Serializer};

@@ -5,9 +5,12 @@
 
 use serde::Serialize;
 
+pub mod pass;
+
+pub use pass::Pass;
+
 use crate::{
-    options::Choice,
-    render::{Indirect, Options, Pass, Shadows, Visibility},
+    options::{Choice, Indirect, Options, Shadows, Visibility},
     scene::{PointLight, Scene},
 };
 
@@ -16,45 +19,6 @@ use crate::{
 pub struct PassDecision {
     pub pass: Pass,
     pub reason: String,
-}
-
-/// A decision taken while rendering a frame, where the static [`Plan`] cannot know the answer
-/// beforehand: per light whether it needs a map and rays at all, and whether cached data (BVH,
-/// light maps, VPLs) was reused or rebuilt.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
-pub struct FrameDecision {
-    /// What it concerns: `bvh`, `light 3`, `vpls`, `vpl_maps`.
-    pub what: String,
-    /// Whether work was done for it in this frame (a build, a map, rays).
-    pub run: bool,
-    /// Whether cached data (a light map or some of its faces, the VPLs, their maps) was built
-    /// for it in this frame, rather than reused.
-    pub built: bool,
-    pub reason: String,
-}
-
-impl FrameDecision {
-    /// A decision that built nothing.
-    pub fn new(what: impl Into<String>, run: bool, reason: impl Into<String>) -> Self {
-        Self { what: what.into(), run, built: false, reason: reason.into() }
-    }
-
-    /// A decision that built (or extended) cached data.
-    pub fn built(what: impl Into<String>, reason: impl Into<String>) -> Self {
-        Self { built: true, ..Self::new(what, true, reason) }
-    }
-
-    /// Cached data that was either built in this frame (work done) or reused (none).
-    pub fn cached(what: impl Into<String>, built: bool, reason: impl Into<String>) -> Self {
-        Self { built, ..Self::new(what, built, reason) }
-    }
-}
-
-/// Prints frame decisions one per line, as [`Plan`]'s `Display` does.
-pub fn format_decisions(d: &[FrameDecision]) -> String {
-    d.iter()
-        .map(|d| format!("  {}  {:<11} {}\n", if d.run { "run " } else { "skip" }, d.what, d.reason))
-        .collect()
 }
 
 /// The passes one frame runs, in order, and those it skips.
@@ -71,7 +35,7 @@ impl Plan {
     }
 
     /// The same for `scene` lit by `lights` instead of its own (moved lights, as
-    /// [`crate::render::Renderer::set_light`] makes them).
+    /// `Renderer::set_light` makes them).
     pub fn with_lights(scene: &Scene, lights: &[PointLight], opts: &Options) -> Self {
         let mut plan = Plan::default();
         let tris = scene.triangle_count();

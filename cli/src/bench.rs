@@ -308,8 +308,8 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             n(y.rays.shadow),
             n(x.rays.specular),
             n(y.rays.specular),
-            n(x.rays.total),
-            n(y.rays.total)
+            n(x.rays.total()),
+            n(y.rays.total())
         );
     }
 
@@ -520,7 +520,7 @@ fn csv(results: &[SceneResult]) -> String {
                 m.rays.specular,
                 m.rays.vpl_shadow,
                 m.rays.vpl_path,
-                m.rays.total,
+                m.rays.total(),
                 m.vpl_pairs
             );
         }

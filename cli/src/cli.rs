@@ -366,7 +366,7 @@ fn plan(a: &PlanArgs) -> Result<()> {
                     "forward": c.forward.to_array(),
                     "decisions": s.decisions,
                     "maps_built": s.maps_built,
-                    "rays": crate::measure::RayCountsJson::from(s.rays),
+                    "rays": s.rays,
                     "passes": passes(s),
                 })
             })

@@ -44,7 +44,7 @@ pub struct Measurement {
     /// BVH build when the renderer was created.
     pub bvh_build_ms: f64,
     /// Rays of one steady-state frame, by kind (identical from frame to frame).
-    pub rays: RayCountsJson,
+    pub rays: RayCounts,
     /// Memory of the light maps and VPL maps, in bytes.
     pub map_bytes: u64,
     /// (camera point, VPL) pairs of the indirect pass per frame (`FrameStats::vpl_pairs`).
@@ -58,34 +58,6 @@ pub struct Measurement {
     /// The last frame's film (not serialised).
     #[serde(skip)]
     pub film: Film,
-}
-
-/// Ray counts with their derived totals, for reports.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct RayCountsJson {
-    pub primary: u64,
-    pub shadow: u64,
-    pub shadow_hint_hits: u64,
-    pub shadow_traversals: u64,
-    pub specular: u64,
-    pub vpl_shadow: u64,
-    pub vpl_path: u64,
-    pub total: u64,
-}
-
-impl From<RayCounts> for RayCountsJson {
-    fn from(r: RayCounts) -> Self {
-        Self {
-            primary: r.primary,
-            shadow: r.shadow,
-            shadow_hint_hits: r.shadow_hint_hits,
-            shadow_traversals: r.shadow_traversals(),
-            specular: r.specular,
-            vpl_shadow: r.vpl_shadow,
-            vpl_path: r.vpl_path,
-            total: r.total(),
-        }
-    }
 }
 
 /// How to measure.

@@ -19,7 +19,7 @@ pub struct RenderStats<'a> {
     pub plan: Vec<&'static str>,
     /// Every pass with the reason it ran or was skipped.
     pub plan_detail: &'a Plan,
-    pub rays: serde_json::Value,
+    pub rays: hyrt_tracer::RayCounts,
     /// Per light, with map-based shadows: camera hits the map decided lit / shadowed, those
     /// left undecided (given a shadow ray), map faces drawn, and with `--check-visibility` the
     /// map decisions a shadow ray contradicts (`wrong`).
@@ -67,7 +67,6 @@ impl<'a> RenderStats<'a> {
         frame: &FrameStats,
         bvh_ms: f64,
     ) -> Self {
-        let r = &frame.rays;
         let mut time_ms = serde_json::Map::new();
         let frame_ms = frame.time_ms.get("total").copied().unwrap_or(0.0);
         time_ms.insert("total".into(), (bvh_ms + frame_ms).into());
@@ -95,16 +94,7 @@ impl<'a> RenderStats<'a> {
             vpls: frame.vpls,
             vpl_map_bytes: frame.vpl_map_bytes,
             vpl_pairs: frame.vpl_pairs,
-            rays: serde_json::json!({
-                "primary": r.primary,
-                "shadow": r.shadow,
-                "shadow_hint_hits": r.shadow_hint_hits,
-                "shadow_traversals": r.shadow_traversals(),
-                "specular": r.specular,
-                "vpl_shadow": r.vpl_shadow,
-                "vpl_path": r.vpl_path,
-                "total": r.total(),
-            }),
+            rays: frame.rays,
             raster: None,
             time_ms,
             vs_reference: None,

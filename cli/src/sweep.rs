@@ -578,7 +578,7 @@ fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
             format!("{:.3}", m.map_bytes as f64 / 1e6),
             m.rays.shadow.to_string(),
             m.rays.vpl_shadow.to_string(),
-            m.rays.total.to_string(),
+            m.rays.total().to_string(),
             pareto.to_string(),
         ]);
         f.iter().map(|s| csv_field(s)).collect::<Vec<_>>().join(",") + "\n"
@@ -690,7 +690,7 @@ fn summary_table(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
             if m.map_bytes > 0 { format!("{:.0}", m.map_build_ms) } else { "-".into() },
             format!("{:.0}", m.first_frame_ms),
             if m.map_bytes > 0 { format!("{:.0}", m.map_bytes as f64 / 1e6) } else { "-".into() },
-            m.rays.total.to_string(),
+            m.rays.total().to_string(),
             match f {
                 Some(true) => "**front**".into(),
                 _ => String::new(),

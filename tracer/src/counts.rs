@@ -76,3 +76,22 @@ impl std::iter::Sum for RayCounts {
         })
     }
 }
+
+/// The counts and their derived totals (`shadow_traversals`, `total`), as every report writes
+/// them.
+#[cfg(feature = "serde")]
+impl serde::Serialize for RayCounts {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut m = s.serialize_struct("RayCounts", 8)?;
+        m.serialize_field("primary", &self.primary)?;
+        m.serialize_field("shadow", &self.shadow)?;
+        m.serialize_field("shadow_hint_hits", &self.shadow_hint_hits)?;
+        m.serialize_field("shadow_traversals", &self.shadow_traversals())?;
+        m.serialize_field("specular", &self.specular)?;
+        m.serialize_field("vpl_shadow", &self.vpl_shadow)?;
+        m.serialize_field("vpl_path", &self.vpl_path)?;
+        m.serialize_field("total", &self.total())?;
+        m.end()
+    }
+}

@@ -24,7 +24,10 @@ use serde::Serialize;
 
 use hyrt::{options::Knobs, output::atomic_write};
 
-use crate::measure::{self, Config, MeasureOptions, Measurement};
+use crate::{
+    measure::{self, Config, MeasureOptions, Measurement},
+    report::{Table, csv_rows, round},
+};
 
 /// Arguments of `hyrt bench`.
 #[derive(clap::Args, Debug)]
@@ -222,7 +225,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
 
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let md = tables(&results, a, &command);
-    let csv = csv(&results);
+    let csv = csv(&results)?;
     let json = serde_json::to_string_pretty(&serde_json::json!({
         "command": command,
         "threads": rayon::current_num_threads(),
@@ -285,41 +288,61 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     }
 
     let _ = writeln!(s, "\n### Table 4.1: primary visibility (rays vs rasterization)\n");
-    let _ = writeln!(
-        s,
-        "| scene | fps RT | fps raster | speed-up | thesis fps RT / proj. | visibility ms RT / raster | shadow rays RT / raster | specular rays RT / raster | total rays RT / raster | thesis total rays |"
+    let mut t = Table::new(
+        &[
+            "scene",
+            "fps RT",
+            "fps raster",
+            "speed-up",
+            "thesis fps RT / proj.",
+            "visibility ms RT / raster",
+            "shadow rays RT / raster",
+            "specular rays RT / raster",
+            "total rays RT / raster",
+            "thesis total rays",
+        ],
+        1,
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         let (x, y) = (r.get("rt"), r.get("rt-raster"));
         let vis = |m: &Measurement| m.pass_ms.get("visibility").copied().unwrap_or(0.0);
         let th = r.thesis.map_or("-".into(), |t| format!("{} / {}", t.t41.0, t.t41.1));
         let tr = r.thesis.map_or("-".into(), |t| format!("{} / {}", n(t.t41.2), n(t.t41.3)));
-        let _ = writeln!(
-            s,
-            "| {} | {:.2} | {:.2} | {} | {th} | {:.1} / {:.1} | {} / {} | {} / {} | {} / {} | {tr} |",
-            r.scene,
-            fps(x),
-            fps(y),
+        t.row(vec![
+            r.scene.clone(),
+            format!("{:.2}", fps(x)),
+            format!("{:.2}", fps(y)),
             ratio(fps(y), fps(x)),
-            vis(x),
-            vis(y),
-            n(x.rays.shadow),
-            n(y.rays.shadow),
-            n(x.rays.specular),
-            n(y.rays.specular),
-            n(x.rays.total()),
-            n(y.rays.total())
-        );
+            th,
+            format!("{:.1} / {:.1}", vis(x), vis(y)),
+            format!("{} / {}", n(x.rays.shadow), n(y.rays.shadow)),
+            format!("{} / {}", n(x.rays.specular), n(y.rays.specular)),
+            format!("{} / {}", n(x.rays.total()), n(y.rays.total())),
+            tr,
+        ]);
     }
+    s.push_str(&t.markdown());
 
     let _ =
         writeln!(s, "\n### Table 4.2: direct light with SMeRTS (reference with rasterized visibility too)\n");
-    let _ = writeln!(
-        s,
-        "| scene | lights | fps ref | fps SMeRTS cube / para | speed-up cube / para | thesis fps ref / SMeRTS | PSNR cube / para | thesis PSNR | wrong px cube / para | shadow rays ref / cube / para | thesis shadow rays | map build ms cube / para | map MB cube / para |"
+    let mut t = Table::new(
+        &[
+            "scene",
+            "lights",
+            "fps ref",
+            "fps SMeRTS cube / para",
+            "speed-up cube / para",
+            "thesis fps ref / SMeRTS",
+            "PSNR cube / para",
+            "thesis PSNR",
+            "wrong px cube / para",
+            "shadow rays ref / cube / para",
+            "thesis shadow rays",
+            "map build ms cube / para",
+            "map MB cube / para",
+        ],
+        1,
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         let (b, c, d) = (r.get("rt-raster"), r.get("smerts-cube"), r.get("smerts-para"));
         let wrong = |m: &Measurement| m.wrong_pixels.map_or("-".into(), |w| w.to_string());
@@ -330,29 +353,23 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
                 format!("{} / {}", n(t.t42.3), n(t.t42.4)),
             )
         });
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.2} | {:.2} / {:.2} | {} / {} | {thf} | {} / {} | {thp} | {} / {} | {} / {} / {} | {thr} | {:.0} / {:.0} | {:.0} / {:.0} |",
-            r.scene,
-            r.lights,
-            fps(b),
-            fps(c),
-            fps(d),
-            ratio(fps(c), fps(b)),
-            ratio(fps(d), fps(b)),
-            fmt_db(c.psnr_db),
-            fmt_db(d.psnr_db),
-            wrong(c),
-            wrong(d),
-            n(b.rays.shadow),
-            n(c.rays.shadow),
-            n(d.rays.shadow),
-            c.map_build_ms,
-            d.map_build_ms,
-            c.map_bytes as f64 / 1e6,
-            d.map_bytes as f64 / 1e6,
-        );
+        t.row(vec![
+            r.scene.clone(),
+            r.lights.to_string(),
+            format!("{:.2}", fps(b)),
+            format!("{:.2} / {:.2}", fps(c), fps(d)),
+            format!("{} / {}", ratio(fps(c), fps(b)), ratio(fps(d), fps(b))),
+            thf,
+            format!("{} / {}", fmt_db(c.psnr_db), fmt_db(d.psnr_db)),
+            thp,
+            format!("{} / {}", wrong(c), wrong(d)),
+            format!("{} / {} / {}", n(b.rays.shadow), n(c.rays.shadow), n(d.rays.shadow)),
+            thr,
+            format!("{:.0} / {:.0}", c.map_build_ms, d.map_build_ms),
+            format!("{:.0} / {:.0}", c.map_bytes as f64 / 1e6, d.map_bytes as f64 / 1e6),
+        ]);
     }
+    s.push_str(&t.markdown());
     let _ = writeln!(
         s,
         "\nTable 4.3 (SMeRTS on the thesis's GPU tracer, OptiX) has no CPU counterpart here and is not reproduced."
@@ -363,11 +380,26 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         "\n### Table 4.4: indirect light, {} VPLs: shadow rays vs one paraboloid map per VPL\n",
         a.vpls
     );
-    let _ = writeln!(
-        s,
-        "| scene | fps ref | fps maps | speed-up | thesis fps ref / maps | PSNR | thesis PSNR | VPL shadow rays removed | thesis removed | indirect pass ms rays / maps | indirect speed-up | pairs | CPU ns per pair rays / maps | VPL map build ms | VPL maps MB |"
+    let mut t4 = Table::new(
+        &[
+            "scene",
+            "fps ref",
+            "fps maps",
+            "speed-up",
+            "thesis fps ref / maps",
+            "PSNR",
+            "thesis PSNR",
+            "VPL shadow rays removed",
+            "thesis removed",
+            "indirect pass ms rays / maps",
+            "indirect speed-up",
+            "pairs",
+            "CPU ns per pair rays / maps",
+            "VPL map build ms",
+            "VPL maps MB",
+        ],
+        1,
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     // CPU time of the indirect pass per (point, VPL) pair: wall time times the threads.
     let threads = rayon::current_num_threads() as f64;
     let per_pair = |ms: f64, pairs: u64| if pairs == 0 { 0.0 } else { ms * 1e6 * threads / pairs as f64 };
@@ -375,78 +407,90 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         let (e, f) = (r.get("rt-vpl"), r.get("vpl-maps"));
         let ind = |m: &Measurement| m.pass_ms.get("indirect").copied().unwrap_or(0.0);
         let t = r.thesis.and_then(|t| t.t44);
-        let _ = writeln!(
-            s,
-            "| {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {} | {} | {:.1} / {:.2} | {:.0} | {:.1} |",
-            r.scene,
-            fps(e),
-            fps(f),
+        t4.row(vec![
+            r.scene.clone(),
+            format!("{:.2}", fps(e)),
+            format!("{:.2}", fps(f)),
             ratio(fps(f), fps(e)),
             t.map_or("-".into(), |t| format!("{} / {}", t.0, t.1)),
             fmt_db(f.psnr_db),
             t.map_or("-".into(), |t| format!("{:.2}", t.2)),
             n(e.rays.vpl_shadow.saturating_sub(f.rays.vpl_shadow)),
             t.map_or("-".into(), |t| n(t.3)),
-            ind(e),
-            ind(f),
+            format!("{:.1} / {:.1}", ind(e), ind(f)),
             ratio(ind(e), ind(f)),
             n(f.vpl_pairs),
-            per_pair(ind(e), e.vpl_pairs),
-            per_pair(ind(f), f.vpl_pairs),
-            f.map_build_ms,
-            f.map_bytes as f64 / 1e6,
-        );
+            format!("{:.1} / {:.2}", per_pair(ind(e), e.vpl_pairs), per_pair(ind(f), f.vpl_pairs)),
+            format!("{:.0}", f.map_build_ms),
+            format!("{:.1}", f.map_bytes as f64 / 1e6),
+        ]);
     }
+    s.push_str(&t4.markdown());
 
     let _ = writeln!(s, "\n### Table 4.5: both together (SMeRTS + VPL maps) vs the full reference\n");
-    let _ = writeln!(
-        s,
-        "| scene | fps ref | fps hybrid | speed-up | thesis fps ref / hybrid | PSNR | thesis PSNR | shadow + VPL shadow rays ref / hybrid | thesis |"
+    let mut t5 = Table::new(
+        &[
+            "scene",
+            "fps ref",
+            "fps hybrid",
+            "speed-up",
+            "thesis fps ref / hybrid",
+            "PSNR",
+            "thesis PSNR",
+            "shadow + VPL shadow rays ref / hybrid",
+            "thesis",
+        ],
+        1,
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         let (e, g) = (r.get("rt-vpl"), r.get("hybrid-vpl"));
         let t = r.thesis.and_then(|t| t.t45);
-        let _ = writeln!(
-            s,
-            "| {} | {:.2} | {:.2} | {} | {} | {} | {} | {} / {} | {} |",
-            r.scene,
-            fps(e),
-            fps(g),
+        t5.row(vec![
+            r.scene.clone(),
+            format!("{:.2}", fps(e)),
+            format!("{:.2}", fps(g)),
             ratio(fps(g), fps(e)),
             t.map_or("-".into(), |t| format!("{} / {}", t.0, t.1)),
             fmt_db(g.psnr_db),
             t.map_or("-".into(), |t| format!("{:.2}", t.2)),
-            n(e.rays.shadow + e.rays.vpl_shadow),
-            n(g.rays.shadow + g.rays.vpl_shadow),
+            format!("{} / {}", n(e.rays.shadow + e.rays.vpl_shadow), n(g.rays.shadow + g.rays.vpl_shadow)),
             t.map_or("-".into(), |t| format!("{} / {}", n(t.3), n(t.4))),
-        );
+        ]);
     }
+    s.push_str(&t5.markdown());
 
     let _ = writeln!(s, "\n### Every configuration: frame time (ms) and fps\n");
-    let _ = writeln!(
-        s,
-        "| scene | config | fps (mean) | median ms | min ms | max ms | first frame ms | BVH ms | PSNR |"
+    let mut tf = Table::new(
+        &[
+            "scene",
+            "config",
+            "fps (mean)",
+            "median ms",
+            "min ms",
+            "max ms",
+            "first frame ms",
+            "BVH ms",
+            "PSNR",
+        ],
+        2,
     );
-    let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         for m in &r.configs {
             let t = &m.frame_ms;
-            let _ = writeln!(
-                s,
-                "| {} | `{}` | {:.2} | {:.1} | {:.1} | {:.1} | {:.0} | {:.0} | {} |",
-                r.scene,
-                m.label,
-                t.fps_mean(),
-                t.median,
-                t.min,
-                t.max,
-                m.first_frame_ms,
-                m.bvh_build_ms,
-                fmt_db(m.psnr_db)
-            );
+            tf.row(vec![
+                r.scene.clone(),
+                format!("`{}`", m.label),
+                format!("{:.2}", t.fps_mean()),
+                format!("{:.1}", t.median),
+                format!("{:.1}", t.min),
+                format!("{:.1}", t.max),
+                format!("{:.0}", m.first_frame_ms),
+                format!("{:.0}", m.bvh_build_ms),
+                fmt_db(m.psnr_db),
+            ]);
         }
     }
+    s.push_str(&tf.markdown());
 
     // Where each frame's time goes: the passes of every configuration, in frame order
     // (`Pass::ALL`); `vis_*` are the parts of `visibility`.
@@ -458,74 +502,84 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         s,
         "\n### Time per pass (ms, medians over the timed frames; `vis_*` are parts of `visibility`)\n"
     );
-    let _ = writeln!(
-        s,
-        "| scene | config | frame | {} |\n|---|---|---:|{}",
-        passes.join(" | "),
-        "---:|".repeat(passes.len())
-    );
+    let mut tp = Table::new(&[&["scene", "config", "frame"][..], &passes[..]].concat(), 2);
     for r in results {
         for m in &r.configs {
-            let cells: Vec<String> =
-                passes.iter().map(|k| m.pass_ms.get(*k).map_or("-".into(), |v| format!("{v:.1}"))).collect();
-            let _ = writeln!(
-                s,
-                "| {} | `{}` | {:.1} | {} |",
-                r.scene,
-                m.label,
-                m.frame_ms.median,
-                cells.join(" | ")
-            );
+            let mut cells =
+                vec![r.scene.clone(), format!("`{}`", m.label), format!("{:.1}", m.frame_ms.median)];
+            cells.extend(passes.iter().map(|k| m.pass_ms.get(*k).map_or("-".into(), |v| format!("{v:.1}"))));
+            tp.row(cells);
         }
     }
+    s.push_str(&tp.markdown());
     s
 }
 
+/// A row of `results.csv`: one scene and configuration.
+#[derive(Serialize)]
+struct CsvRow<'a> {
+    scene: &'a str,
+    config: &'a str,
+    flags: &'a str,
+    fps_mean: f64,
+    frame_ms_median: f64,
+    frame_ms_mean: f64,
+    frame_ms_min: f64,
+    frame_ms_max: f64,
+    runs: usize,
+    first_frame_ms: f64,
+    map_build_ms: f64,
+    bvh_build_ms: f64,
+    map_bytes: u64,
+    /// `inf` for an exact match; empty without a reference.
+    psnr_db: Option<String>,
+    wrong_pixels: Option<u64>,
+    wrong_pairs: Option<u64>,
+    rays_primary: u64,
+    rays_shadow: u64,
+    rays_shadow_hint_hits: u64,
+    rays_specular: u64,
+    rays_vpl_shadow: u64,
+    rays_vpl_path: u64,
+    rays_total: u64,
+    vpl_pairs: u64,
+}
+
 /// One row per scene and configuration.
-fn csv(results: &[SceneResult]) -> String {
-    let mut s = String::from(
-        "scene,config,flags,fps_mean,frame_ms_median,frame_ms_mean,frame_ms_min,frame_ms_max,runs,first_frame_ms,map_build_ms,bvh_build_ms,map_bytes,psnr_db,wrong_pixels,wrong_pairs,rays_primary,rays_shadow,rays_shadow_hint_hits,rays_specular,rays_vpl_shadow,rays_vpl_path,rays_total,vpl_pairs\n",
-    );
-    for r in results {
-        for m in &r.configs {
-            let flags = r.flags.iter().find(|(i, _)| *i == m.label).map_or("", |(_, f)| f.as_str());
+fn csv(results: &[SceneResult]) -> Result<String> {
+    let ms = |v: f64| round(v, 3);
+    let rows = results.iter().flat_map(|r| {
+        r.configs.iter().map(move |m| {
             let t = &m.frame_ms;
-            let opt = |v: Option<u64>| v.map_or(String::new(), |v| v.to_string());
-            let _ = writeln!(
-                s,
-                "{},{},\"{}\",{:.4},{:.3},{:.3},{:.3},{:.3},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{}",
-                r.scene,
-                m.label,
-                flags,
-                t.fps_mean(),
-                t.median,
-                t.mean,
-                t.min,
-                t.max,
-                t.runs,
-                m.first_frame_ms,
-                m.map_build_ms,
-                m.bvh_build_ms,
-                m.map_bytes,
-                m.psnr_db.map_or(String::new(), |p| if p.is_infinite() {
-                    "inf".into()
-                } else {
-                    format!("{p:.3}")
-                }),
-                opt(m.wrong_pixels),
-                opt(m.wrong_pairs),
-                m.rays.primary,
-                m.rays.shadow,
-                m.rays.shadow_hint_hits,
-                m.rays.specular,
-                m.rays.vpl_shadow,
-                m.rays.vpl_path,
-                m.rays.total(),
-                m.vpl_pairs
-            );
-        }
-    }
-    s
+            CsvRow {
+                scene: &r.scene,
+                config: &m.label,
+                flags: r.flags.iter().find(|(i, _)| *i == m.label).map_or("", |(_, f)| f.as_str()),
+                fps_mean: round(t.fps_mean(), 4),
+                frame_ms_median: ms(t.median),
+                frame_ms_mean: ms(t.mean),
+                frame_ms_min: ms(t.min),
+                frame_ms_max: ms(t.max),
+                runs: t.runs,
+                first_frame_ms: ms(m.first_frame_ms),
+                map_build_ms: ms(m.map_build_ms),
+                bvh_build_ms: ms(m.bvh_build_ms),
+                map_bytes: m.map_bytes,
+                psnr_db: m.psnr_db.map(|p| if p.is_infinite() { "inf".into() } else { format!("{p:.3}") }),
+                wrong_pixels: m.wrong_pixels,
+                wrong_pairs: m.wrong_pairs,
+                rays_primary: m.rays.primary,
+                rays_shadow: m.rays.shadow,
+                rays_shadow_hint_hits: m.rays.shadow_hint_hits,
+                rays_specular: m.rays.specular,
+                rays_vpl_shadow: m.rays.vpl_shadow,
+                rays_vpl_path: m.rays.vpl_path,
+                rays_total: m.rays.total(),
+                vpl_pairs: m.vpl_pairs,
+            }
+        })
+    });
+    csv_rows(rows)
 }
 
 #[cfg(test)]

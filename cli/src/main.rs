@@ -8,6 +8,7 @@ mod flip;
 mod measure;
 mod orbit;
 mod plot;
+mod report;
 mod stats;
 mod sweep;
 

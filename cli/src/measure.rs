@@ -108,7 +108,7 @@ pub fn measure(
                 first_frame_ms: t("total"),
                 map_build_ms: t("map_build") + t("vpl_map_build"),
                 bvh_build_ms: r.bvh_build_ms(),
-                rays: f.stats.rays.into(),
+                rays: f.stats.rays,
                 map_bytes: f.stats.lights.iter().map(|l| l.map_bytes).sum::<u64>() + f.stats.vpl_map_bytes,
                 vpl_pairs: f.stats.vpl_pairs,
                 psnr_db: None,
@@ -132,7 +132,7 @@ pub fn measure(
                     passes[i].entry((*k).to_string()).or_default().push(*v);
                 }
             }
-            out[i].rays = f.stats.rays.into();
+            out[i].rays = f.stats.rays;
             out[i].film = f.film;
         }
     }

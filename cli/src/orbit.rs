@@ -7,7 +7,6 @@
 //! BVH's companions (light maps, VPLs); every later one reuses them and draws only the
 //! light-map faces its view newly needs ([`Renderer::set_camera`]), counted per frame.
 
-use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -21,7 +20,10 @@ use hyrt::{
     scene::{Camera, Scene},
 };
 
-use crate::bench::BenchArgs;
+use crate::{
+    bench::BenchArgs,
+    report::{Table, csv_rows, round},
+};
 
 /// Half the arc the camera swings through, in degrees.
 pub const ARC_DEG: f32 = 20.0;
@@ -37,6 +39,16 @@ pub fn orbit_camera(cam: &Camera, i: u32, n: u32) -> Camera {
     let turn = Quat::from_axis_angle(cam.up.normalize_or(Vec3::Y), angle);
     let forward = turn * cam.forward;
     Camera { eye: target - forward, forward, ..*cam }
+}
+
+/// A row of `orbit.csv`: one frame of one configuration.
+#[derive(serde::Serialize)]
+struct CsvRow {
+    scene: String,
+    config: &'static str,
+    frame: u32,
+    ms: f64,
+    faces_drawn: u32,
 }
 
 /// One configuration's frames along the path.
@@ -60,8 +72,21 @@ pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
         "Produced by `hyrt bench --orbit {n}` ({} threads): the camera swings +-{ARC_DEG} degrees about the scene's target in {n} frames; the two configurations' frames alternate at each position. Times are of the frames after the first (which builds the maps); percentiles by nearest rank; fps = frames / total time. Faces: light-map faces drawn after the first frame (0 when the first view's maps serve the whole path).\n\n",
         rayon::current_num_threads()
     );
-    md.push_str("| scene | config | frames | median ms | p5 ms | p95 ms | fps | first frame ms | faces drawn after the first |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
-    let mut csv = String::from("scene,config,frame,ms,faces_drawn\n");
+    let mut table = Table::new(
+        &[
+            "scene",
+            "config",
+            "frames",
+            "median ms",
+            "p5 ms",
+            "p95 ms",
+            "fps",
+            "first frame ms",
+            "faces drawn after the first",
+        ],
+        2,
+    );
+    let mut frames = Vec::new();
     for sc in scenes {
         let cam = sc.camera.context("the scene has no camera")?;
         let mut renderers = Vec::new();
@@ -83,7 +108,13 @@ pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
                 r.render(&|| {});
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 let faces = faces_so_far(r, sc) - before;
-                let _ = writeln!(csv, "{},{},{i},{ms:.3},{faces}", sc.name, t.label);
+                frames.push(CsvRow {
+                    scene: sc.name.clone(),
+                    config: t.label,
+                    frame: i,
+                    ms: round(ms, 3),
+                    faces_drawn: faces,
+                });
                 if i == 0 {
                     t.first_ms = ms;
                 } else {
@@ -95,23 +126,23 @@ pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
         for t in &tracks {
             let total: f64 = t.ms.iter().sum();
             let fps = if total > 0.0 { t.ms.len() as f64 * 1e3 / total } else { 0.0 };
-            let _ = writeln!(
-                md,
-                "| {} | `{}` | {} | {:.1} | {:.1} | {:.1} | {:.2} | {:.0} | {} |",
-                sc.name,
-                t.label,
-                t.ms.len(),
-                percentile(&t.ms, 50.0),
-                percentile(&t.ms, 5.0),
-                percentile(&t.ms, 95.0),
-                fps,
-                t.first_ms,
-                t.faces.iter().sum::<u32>()
-            );
+            table.row(vec![
+                sc.name.clone(),
+                format!("`{}`", t.label),
+                t.ms.len().to_string(),
+                format!("{:.1}", percentile(&t.ms, 50.0)),
+                format!("{:.1}", percentile(&t.ms, 5.0)),
+                format!("{:.1}", percentile(&t.ms, 95.0)),
+                format!("{fps:.2}"),
+                format!("{:.0}", t.first_ms),
+                t.faces.iter().sum::<u32>().to_string(),
+            ]);
         }
         eprintln!("{}: orbit done", sc.name);
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create folder", a.out.display()))?;
+    md.push_str(&table.markdown());
+    let csv = csv_rows(frames)?;
     for (name, text) in [("orbit.md", &md), ("orbit.csv", &csv)] {
         atomic_write(&a.out.join(name), |tmp| std::fs::write(tmp, text).map_err(Into::into))?;
     }

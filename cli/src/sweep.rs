@@ -45,6 +45,7 @@ use crate::{
     flip::flip_mean,
     measure::{Config, MeasureOptions, Measurement, measure},
     plot,
+    report::{Table, csv_records},
 };
 
 /// `hyrt sweep` arguments.
@@ -177,9 +178,10 @@ fn flag_error(e: &anyhow::Error) -> String {
     first.strip_prefix("error: ").unwrap_or(first).to_string()
 }
 
-/// Render flags split on whitespace.
-fn split_flags(s: &str) -> Vec<String> {
-    s.split_whitespace().map(str::to_string).collect()
+/// Render flags split as a POSIX shell splits words (quotes and escapes included), so that
+/// `--base` reads as the same flags on the command line would.
+fn split_flags(what: &str, s: &str) -> Result<Vec<String>> {
+    shlex::split(s).ok_or_else(|| anyhow!("{what} '{s}': unbalanced quotes or a trailing backslash"))
 }
 
 /// Whether `flags` set the render flag `--name` (as `--name V` or `--name=V`).
@@ -226,7 +228,7 @@ impl Row {
 pub fn run(a: &SweepArgs) -> Result<()> {
     // Everything is checked before anything is rendered or written.
     let knobs = parse_knobs(&a.knobs)?;
-    let base = split_flags(&a.base);
+    let base = split_flags("--base", &a.base)?;
     for k in &knobs {
         if sets(&base, &k.name) {
             bail!("knob '{}' is also set in --base '{}': set it in one place only", k.name, a.base);
@@ -438,7 +440,7 @@ struct Sweep<'c> {
 /// light when it has some and the reference flags choose none (see `SweepArgs::reference`).
 /// Also the label of the combination whose VPLs were taken.
 fn reference_flags(reference: &str, combos: &[Combo]) -> Result<(Vec<String>, Option<String>)> {
-    let mut flags = split_flags(reference);
+    let mut flags = split_flags("--reference", reference)?;
     let k =
         Knobs::from_flags(&flags).map_err(|e| anyhow!("--reference '{reference}': {}", flag_error(&e)))?;
     if k.given("indirect").is_some() || k.given("vpls").is_some() {
@@ -526,11 +528,6 @@ fn one_line(r: &Row) -> String {
     )
 }
 
-/// A CSV field, quoted when it has to be.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
-}
-
 const CSV_COLUMNS: [&str; 16] = [
     "frame_ms_median",
     "frame_ms_min",
@@ -552,12 +549,11 @@ const CSV_COLUMNS: [&str; 16] = [
 
 /// The CSV: a `config` column (`reference`, or the configuration's number), one column per
 /// knob, then the measurements; the reference first (its knob columns empty).
-fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
+fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> Result<String> {
     let front = front_of(rows);
     let mut header = vec!["config".to_string()];
     header.extend(knobs.iter().map(|k| k.name.clone()));
     header.extend(CSV_COLUMNS.iter().map(|s| s.to_string()));
-    let mut out = header.iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(",") + "\n";
     let line = |id: String, r: &Row, pareto: bool| {
         let m = &r.m;
         let (median, _) = r.front_point();
@@ -581,13 +577,11 @@ fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
             m.rays.total().to_string(),
             pareto.to_string(),
         ]);
-        f.iter().map(|s| csv_field(s)).collect::<Vec<_>>().join(",") + "\n"
+        f
     };
-    out += &line("reference".into(), reference, false);
-    for (i, (r, &p)) in rows.iter().zip(&front).enumerate() {
-        out += &line((i + 1).to_string(), r, p);
-    }
-    out
+    let mut records = vec![line("reference".into(), reference, false)];
+    records.extend(rows.iter().zip(&front).enumerate().map(|(i, (r, &p))| line((i + 1).to_string(), r, p)));
+    csv_records(&header, &records)
 }
 
 /// `inf` PSNR as the string "inf" (JSON has no infinity).
@@ -625,7 +619,7 @@ fn json(ctx: &Sweep, reference: &Row, rows: &[Row]) -> Result<serde_json::Value>
         "height": ctx.scene.settings.height,
         "runs": ctx.a.runs,
         "threads": rayon::current_num_threads(),
-        "base_flags": split_flags(&ctx.a.base),
+        "base_flags": split_flags("--base", &ctx.a.base)?,
         "reference_flags": ctx.ref_flags,
         "reference_vpls_from": ctx.vpls_from,
         "knobs": ctx.knobs.iter().map(|k| serde_json::json!({"name": k.name, "values": k.values})).collect::<Vec<_>>(),
@@ -637,7 +631,7 @@ fn json(ctx: &Sweep, reference: &Row, rows: &[Row]) -> Result<serde_json::Value>
 
 fn write_tables(ctx: &Sweep, reference: &Row, rows: &[Row]) -> Result<()> {
     let out = &ctx.a.out;
-    let text = csv(ctx.knobs, reference, rows);
+    let text = csv(ctx.knobs, reference, rows)?;
     atomic_write(&out.join("sweep.csv"), |tmp| std::fs::write(tmp, text.as_bytes()).map_err(Into::into))?;
     let j = serde_json::to_string_pretty(&json(ctx, reference, rows)?)?;
     atomic_write(&out.join("sweep.json"), |tmp| std::fs::write(tmp, j.as_bytes()).map_err(Into::into))
@@ -666,11 +660,7 @@ fn summary_table(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
         ]
         .map(String::from),
     );
-    let mut t = format!("| {} |\n", head.join(" | "));
-    t += &format!(
-        "|{}\n",
-        (0..head.len()).map(|i| if i < knobs.len() { "---|" } else { "---:|" }).collect::<String>()
-    );
+    let mut t = Table::new(&head, knobs.len());
     for (r, f) in all {
         let m = &r.m;
         let mut cells: Vec<String> = if f.is_none() {
@@ -696,9 +686,9 @@ fn summary_table(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
                 _ => String::new(),
             },
         ]);
-        t += &format!("| {} |\n", cells.join(" | "));
+        t.row(cells);
     }
-    t
+    t.markdown()
 }
 
 /// The output folder's README.md.
@@ -784,10 +774,7 @@ mod tests {
     }
 
     #[test]
-    fn csv_fields_are_quoted() {
-        assert_eq!(csv_field("a"), "a");
-        assert_eq!(csv_field("a,b"), "\"a,b\"");
-        assert_eq!(csv_field("say \"x\""), "\"say \"\"x\"\"\"");
+    fn file_stems_keep_the_knob_values() {
         assert_eq!(file_stem("shadow-map-res=256 bias=0.5"), "shadow-map-res-256_bias-0.5");
     }
 }

@@ -1,14 +1,9 @@
 //! Helpers shared by the pipeline benchmarks.
 #![allow(dead_code)]
 
-/// Median of `v` (sorted in place); NaN when empty.
+/// Median of `v` ([`hyrt::metrics::Timing`]'s, the one median of every tool).
 pub fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    hyrt::metrics::Timing::of(v).median
 }
 
 /// `HYRT_BENCH_FRAMES`, or `default`.

@@ -483,18 +483,8 @@ pub fn for_each_fragment(
     }
 }
 
-/// A deterministic PRNG shared by the unit tests' scene generators.
+/// The unit tests' PRNG.
 #[cfg(test)]
 mod test_rng {
-    /// xorshift64*, uniform in `[0, 1)`.
-    pub struct Rng(pub u64);
-
-    impl Rng {
-        pub fn f32(&mut self) -> f32 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
+    pub use hyrt_testkit::Rng;
 }

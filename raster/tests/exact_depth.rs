@@ -144,14 +144,8 @@ fn grazing_plane_depth_is_exact_to_a_few_ulps_when_clipped() {
 /// documented clamp range).
 #[test]
 fn depth_never_leaves_the_vertex_depth_range() {
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut rand = move || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = hyrt_testkit::Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rand = move || rng.f64();
     let opts = RasterOptions { reversed_z: true, ..Default::default() };
     let mut fragments = 0;
     for i in 0..20_000 {

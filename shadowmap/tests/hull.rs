@@ -9,17 +9,7 @@ use hyrt_shadowmap::{
     classify::{Classifier, Hull, plane_groups, point_error_bound, triangle_planes},
 };
 
-/// xorshift64*, uniform in `[0, 1)`.
-struct Rng(u64);
-
-impl Rng {
-    fn f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
+use hyrt_testkit::Rng;
 
 /// A floor of two triangles (ids 0 and 1) at `y = 0` of half-size `size` around `centre`, and
 /// small random occluders (ids from 2) scattered above it, below a light.

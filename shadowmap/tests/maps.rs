@@ -9,24 +9,15 @@
 use glam::{DVec3, Vec3};
 use hyrt_shadowmap::{CubeFace, EMPTY, LightMap, MapCoord, MapKind, MapOptions};
 
-/// xorshift64*, uniform in `[0, 1)`.
-struct Rng(u64);
+use hyrt_testkit::Rng;
 
-impl Rng {
-    fn f64(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(self.f64(), self.f64(), self.f64()) * 2.0 - 1.0;
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
+/// A random unit direction (uniform on the sphere, by rejection).
+fn unit(rng: &mut Rng) -> DVec3 {
+    loop {
+        let v = DVec3::new(rng.f64(), rng.f64(), rng.f64()) * 2.0 - 1.0;
+        let l = v.length();
+        if l > 0.1 && l <= 1.0 {
+            return v / l;
         }
     }
 }
@@ -147,7 +138,7 @@ fn layered_scene(seed: u64, layers: usize, light: DVec3) -> Vec<[Vec3; 3]> {
         let r = 1.25f64.powi(layer as i32);
         let mut cones: Vec<(DVec3, f64)> = Vec::new();
         while cones.len() < 3 {
-            let (c, radius) = (rng.unit(), (8.0 + 22.0 * rng.f64()).to_radians());
+            let (c, radius) = (unit(&mut rng), (8.0 + 22.0 * rng.f64()).to_radians());
             if cones.iter().all(|&(c2, r2)| c.dot(c2).clamp(-1.0, 1.0).acos() > radius + r2) {
                 cones.push((c, radius));
             }
@@ -754,7 +745,7 @@ fn maps_are_identical_for_any_thread_count() {
     let light = Vec3::new(0.1, 0.2, -0.1);
     let tris: Vec<[Vec3; 3]> = (0..12_000)
         .map(|_| {
-            let c = rng.unit() * (1.0 + 4.0 * rng.f64());
+            let c = unit(&mut rng) * (1.0 + 4.0 * rng.f64());
             [0; 3].map(|_| (c + (DVec3::new(rng.f64(), rng.f64(), rng.f64()) - 0.5) * 0.6).as_vec3())
         })
         .collect();

@@ -5,29 +5,11 @@
 use glam::{Vec3, vec3};
 use hyrt_tracer::{Hit, Isa, RowRays, Tracer};
 
-/// xorshift64*: deterministic, no dependencies.
-struct Rng(u64);
+use hyrt_testkit::Rng;
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-    fn vec(&mut self, r: f32) -> Vec3 {
-        vec3(self.range(-r, r), self.range(-r, r), self.range(-r, r))
-    }
+/// A point with each coordinate uniform in `[-r, r)`.
+fn vec(rng: &mut Rng, r: f32) -> Vec3 {
+    vec3(rng.range(-r, r), rng.range(-r, r), rng.range(-r, r))
 }
 
 /// A hit as bits, so that `-0.0` and `0.0` (or two NaNs) are told apart.
@@ -100,9 +82,9 @@ fn runs(rng: &mut Rng, len: usize, n: u32, max_run: u64) -> Vec<u32> {
         let id = match rng.below(10) {
             0 => u32::MAX,
             1 => n + rng.below(3) as u32,
-            _ => rng.below(n as u64) as u32,
+            _ => rng.below(n as usize) as u32,
         };
-        let run = 1 + rng.below(max_run) as usize;
+        let run = 1 + rng.below(max_run as usize);
         ids.extend(std::iter::repeat_n(id, run.min(len - ids.len())));
     }
     ids
@@ -121,13 +103,13 @@ fn random_rows_are_bit_identical_to_single_rays() {
         let size = [1e-3f32, 1.0, 7.0, 3e3][scene % 4];
         let mut tris: Vec<[Vec3; 3]> = (0..300)
             .map(|_| {
-                let c = rng.vec(size);
+                let c = vec(&mut rng, size);
                 let r = size * rng.range(0.01, 0.5);
-                [c + rng.vec(r), c + rng.vec(r), c + rng.vec(r)]
+                [c + vec(&mut rng, r), c + vec(&mut rng, r), c + vec(&mut rng, r)]
             })
             .collect();
         // Degenerate ones: a point, a segment, collinear points; and non-finite ones.
-        let p = rng.vec(size);
+        let p = vec(&mut rng, size);
         tris.push([p, p, p]);
         tris.push([p, p + Vec3::X * size, p]);
         tris.push([p, p + Vec3::Y * size, p + Vec3::Y * size * 2.0]);
@@ -138,10 +120,10 @@ fn random_rows_are_bit_identical_to_single_rays() {
         for row in 0..150 {
             let wild = row % 3 == 0;
             let rays = RowRays {
-                origin: rng.vec(size * 1.5),
-                forward: rng.vec(1.0) * if row % 7 == 0 { 1e-3 } else { 1.0 },
-                right: rng.vec(1.0),
-                row_offset: rng.vec(0.5),
+                origin: vec(&mut rng, size * 1.5),
+                forward: vec(&mut rng, 1.0) * if row % 7 == 0 { 1e-3 } else { 1.0 },
+                right: vec(&mut rng, 1.0),
+                row_offset: vec(&mut rng, 0.5),
                 two_over_w: if wild { rng.range(0.1, 1.0) } else { 2.0 / rng.range(100.0, 2000.0) },
                 tan_x: rng.range(0.05, 3.0),
                 tmax: match row % 5 {
@@ -150,13 +132,13 @@ fn random_rows_are_bit_identical_to_single_rays() {
                     _ => f32::INFINITY,
                 },
             };
-            let len = rng.below(70) as usize;
+            let len = rng.below(70);
             let x0 = rng.below(3000) as u32;
             let ids: Vec<u32> = match row % 4 {
                 // One triangle for all lanes (the vector kernels broadcast it).
-                0 => vec![rng.below(n as u64) as u32; len],
+                0 => vec![rng.below(n as usize) as u32; len],
                 // Every lane its own (gathered).
-                1 => (0..len).map(|_| rng.below(n as u64 + 2) as u32).collect(),
+                1 => (0..len).map(|_| rng.below(n as usize + 2) as u32).collect(),
                 _ => runs(&mut rng, len, n, if wild { 3 } else { 40 }),
             };
             check(&tracer, &rays, x0, &ids, &mut seen);
@@ -178,26 +160,27 @@ fn origins_next_to_the_plane_are_bit_identical() {
     let mut seen = Seen::default();
     for scene in 0..6 {
         let size = [0.01f32, 1.0, 500.0][scene % 3];
-        let tris: Vec<[Vec3; 3]> = (0..64).map(|_| [rng.vec(size), rng.vec(size), rng.vec(size)]).collect();
+        let tris: Vec<[Vec3; 3]> =
+            (0..64).map(|_| [vec(&mut rng, size), vec(&mut rng, size), vec(&mut rng, size)]).collect();
         let tracer = Tracer::build(&tris);
         for _ in 0..400 {
-            let id = rng.below(tris.len() as u64) as u32;
+            let id = rng.below(tris.len()) as u32;
             let [a, b, c] = tris[id as usize];
             let n = (b - a).cross(c - a).normalize();
-            let (u, v) = (rng.unit(), rng.unit());
+            let (u, v) = (rng.f32(), rng.f32());
             let on_plane = a + (b - a) * u + (c - a) * v;
             // From 2^-26 to 2^-14 of the scene's size off the plane, on either side.
             let off = size * 2f32.powf(-rng.range(14.0, 26.0)) * if rng.below(2) == 0 { 1.0 } else { -1.0 };
             let rays = RowRays {
                 origin: on_plane + n * off,
-                forward: -n * off.signum() + rng.vec(0.7),
-                right: rng.vec(1.0),
+                forward: -n * off.signum() + vec(&mut rng, 0.7),
+                right: vec(&mut rng, 1.0),
                 row_offset: Vec3::ZERO,
                 two_over_w: 2.0 / rng.range(50.0, 500.0),
                 tan_x: rng.range(0.1, 1.5),
                 tmax: f32::INFINITY,
             };
-            let ids = vec![id; 1 + rng.below(40) as usize];
+            let ids = vec![id; 1 + rng.below(40)];
             check(&tracer, &rays, rng.below(100) as u32, &ids, &mut seen);
         }
     }

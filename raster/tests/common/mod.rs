@@ -169,27 +169,8 @@ pub fn grid_tris(
     tris
 }
 
-/// SplitMix64: a small deterministic PRNG for test inputs.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
+#[allow(unused_imports)] // Not every test that includes this module draws random inputs.
+pub use hyrt_testkit::Rng;
 
 /// Whether `value(x, y)` equals `value` at all 8 neighbours inside the image: pixels whose centre
 /// is within about a pixel of an analytic boundary are excluded from exact comparisons.

@@ -226,16 +226,22 @@ pub struct RasterOptions {
     pub depth: bool,
 }
 
+impl RasterOptions {
+    /// [`RasterOptions::default`], as a constant: 64-pixel tiles, both faces drawn, depth in
+    /// `[0, 1]` with exact comparisons, depth and barycentrics written.
+    pub const DEFAULT: Self = Self {
+        tile_size: 64,
+        cull_backfaces: false,
+        reversed_z: false,
+        depth_tie: 0.0,
+        barycentrics: true,
+        depth: true,
+    };
+}
+
 impl Default for RasterOptions {
     fn default() -> Self {
-        Self {
-            tile_size: 64,
-            cull_backfaces: false,
-            reversed_z: false,
-            depth_tie: 0.0,
-            barycentrics: true,
-            depth: true,
-        }
+        Self::DEFAULT
     }
 }
 

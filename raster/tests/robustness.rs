@@ -12,14 +12,8 @@ use hyrt_raster::{
     rasterize,
 };
 
-const TWO_SIDED: RasterOptions = RasterOptions {
-    tile_size: 64,
-    cull_backfaces: false,
-    reversed_z: false,
-    depth_tie: 0.0,
-    barycentrics: true,
-    depth: true,
-};
+/// Both faces drawn (the default).
+const TWO_SIDED: RasterOptions = RasterOptions::DEFAULT;
 
 /// Every buffer has the right size; a pixel is either empty (id EMPTY_ID, depth EMPTY_DEPTH,
 /// bary 0) or holds a known id, a depth in [0, 1] and finite barycentrics.

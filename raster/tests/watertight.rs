@@ -16,14 +16,8 @@ const CULL: RasterOptions = RasterOptions {
     barycentrics: true,
     depth: true,
 };
-const TWO_SIDED: RasterOptions = RasterOptions {
-    tile_size: 64,
-    cull_backfaces: false,
-    reversed_z: false,
-    depth_tie: 0.0,
-    barycentrics: true,
-    depth: true,
-};
+/// Both faces drawn (the default).
+const TWO_SIDED: RasterOptions = RasterOptions::DEFAULT;
 
 /// Checks a closed sphere mesh seen from outside. Bounds:
 /// * every pixel is covered by at most 1 front-facing triangle;

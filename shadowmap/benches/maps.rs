@@ -157,21 +157,25 @@ fn vpl_maps() -> &'static [LightMap] {
 /// core).
 #[divan::bench(sample_count = 20)]
 fn vpl_gather(bencher: Bencher) {
-    use hyrt_shadowmap::classify::Classifier;
     let (maps, pts) = (vpl_maps(), &points()[..4096]);
     bencher.counter(divan::counter::ItemsCount::new(pts.len() * maps.len())).bench_local(|| {
         let mut seen = 0usize;
         for map in maps {
-            let cls = Classifier {
-                map,
-                planes: planes(),
-                bias: 0.5,
-                point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
-            };
+            let cls = vpl_classifier(map);
             seen += pts.iter().filter(|(p, id)| cls.visible(*p, *id)).count();
         }
         seen
     });
+}
+
+/// The classifier of a VPL map of [`vpl_maps`], with the renderer's VPL bias.
+fn vpl_classifier(map: &hyrt_shadowmap::LightMap) -> hyrt_shadowmap::classify::Classifier<'_> {
+    hyrt_shadowmap::classify::Classifier {
+        map,
+        planes: planes(),
+        bias: 0.5,
+        point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
+    }
 }
 
 /// [`vpl_gather`] with the renderer's default lookups: the 2x2 texels around each point,
@@ -179,17 +183,11 @@ fn vpl_gather(bencher: Bencher) {
 /// one closure holding both lookups measured the texel one 20 % slower (other inlining).
 #[divan::bench(sample_count = 20)]
 fn vpl_gather_bilinear(bencher: Bencher) {
-    use hyrt_shadowmap::classify::Classifier;
     let (maps, pts) = (vpl_maps(), &points()[..4096]);
     bencher.counter(divan::counter::ItemsCount::new(pts.len() * maps.len())).bench_local(|| {
         let mut sum = 0.0f32;
         for map in maps {
-            let cls = Classifier {
-                map,
-                planes: planes(),
-                bias: 0.5,
-                point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
-            };
+            let cls = vpl_classifier(map);
             sum += pts.iter().map(|(p, id)| cls.visibility_at(*p, *id, cls.locate(*p))).sum::<f32>();
         }
         sum

@@ -248,23 +248,25 @@ pub(crate) fn add_vpl_on(isa: Isa, c: &VplConsts, map: &VplMap, pts: &Points, su
         // SAFETY: an `Isa` of a tier exists only where the CPU runs it; the kernels' loads stay
         // within the first `done` points of `pts` and `sums` (asserted there) and their gathers
         // within the map's texels (indices clamped to the resolution; see each kernel).
+        use vector::{Avx2, Avx512, Lanes};
+        let whole = |n: usize| pts.len() / n * n;
         unsafe {
             match (isa.tier(), planes, depths) {
                 (Tier::Avx512, Some(g), _) => {
-                    done = pts.len() / avx512::LANES * avx512::LANES;
-                    avx512::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
+                    done = whole(Avx512::N);
+                    vector::add_vpl_avx512::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
                 }
                 (Tier::Avx512, _, Some((bits, _))) => {
-                    done = pts.len() / avx512::LANES * avx512::LANES;
-                    avx512::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
+                    done = whole(Avx512::N);
+                    vector::add_vpl_avx512::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
                 }
                 (Tier::Avx2, Some(g), _) => {
-                    done = pts.len() / LANES * LANES;
-                    avx2::add_vpl::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
+                    done = whole(Avx2::N);
+                    vector::add_vpl_avx2::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
                 }
                 (Tier::Avx2, _, Some((bits, _))) => {
-                    done = pts.len() / LANES * LANES;
-                    avx2::add_vpl::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
+                    done = whole(Avx2::N);
+                    vector::add_vpl_avx2::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
                 }
                 _ => {}
             }
@@ -292,183 +294,299 @@ fn add_vpl_from(f: PairFn, c: &VplConsts, map: &VplMap, pts: &Points, first: usi
     }
 }
 
+/// The AVX2 and AVX-512 kernels: one body, generic over the vector operations of each
+/// instruction set ([`Lanes`]), so that the two compute the same operations in the same order
+/// as [`super::pair`] by construction.
 #[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use std::arch::x86_64::*;
-
-    use super::{LANES, Points, Sums, VplConsts};
-
-    /// [`super::pair`] on eight points at once for the first `n` points (a multiple of eight),
-    /// summed into `sums`: texels are planes (three `f32` each) or, with `DEPTH16`, half floats.
-    ///
-    /// # Safety
-    /// AVX2 and F16C must be present; `texels` must point to `len` elements: `3 res^2` `f32`
-    /// for planes, or more than `res^2` `u16` for half floats (the padding element keeps a
-    /// 4-byte load at the last texel in bounds).
-    #[target_feature(enable = "avx2,f16c")]
-    pub(super) unsafe fn add_vpl<const DEPTH16: bool>(
-        c: &VplConsts,
-        texels: *const f32,
-        len: usize,
-        pts: &Points,
-        n: usize,
-        sums: &mut Sums,
-    ) {
-        assert!(n.is_multiple_of(LANES) && n <= pts.len() && sums.0.iter().all(|s| s.len() >= n));
-        let texels_n = c.res as usize * c.res as usize;
-        assert!(if DEPTH16 { len > texels_n } else { len == 3 * texels_n });
-        let s = _mm256_set1_ps;
-        let (ox, oy, oz) = (s(c.o.x), s(c.o.y), s(c.o.z));
-        let (tx, ty, tz) = (s(c.t.x), s(c.t.y), s(c.t.z));
-        let (bx, by, bz) = (s(c.b.x), s(c.b.y), s(c.b.z));
-        let (ax, ay, az) = (s(c.a.x), s(c.a.y), s(c.a.z));
-        let (ir, ig, ib) = (s(c.intensity.x), s(c.intensity.y), s(c.intensity.z));
-        let (clamp2, bias_k, e, half, last) = (s(c.clamp2), s(c.bias_k), s(c.e), s(c.half), s(c.last));
-        let (zero, one, tol, sign) = (s(0.0), s(1.0), s(c.tol), s(-0.0));
-        let (inv_scale, inv2, halfpx) = (s(c.inv_scale), s(2.0 / c.res as f32), s(0.5));
-        let res = _mm256_set1_epi32(c.res as i32);
-        let low16 = _mm256_set1_epi32(0xffff);
-        let dot = |x: __m256, y: __m256, z: __m256, a: __m256, b: __m256, c: __m256| {
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x), _mm256_mul_ps(b, y)), _mm256_mul_ps(c, z))
-        };
-        let [px, py, pz] = &pts.p;
-        let [nsx, nsy, nsz] = &pts.ns;
-        let [ngx, ngy, ngz] = &pts.ng;
-        let [sr, sg, sb] = &mut sums.0;
-        for i in (0..n).step_by(LANES) {
-            // SAFETY (all loads and stores of the loop): `i + 8 <= n`, within every array.
-            let ld = |v: &[f32]| unsafe { _mm256_loadu_ps(v.as_ptr().add(i)) };
-            let dx = _mm256_sub_ps(ld(px), ox);
-            let dy = _mm256_sub_ps(ld(py), oy);
-            let dz = _mm256_sub_ps(ld(pz), oz);
-            let d2 = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
-                _mm256_mul_ps(dz, dz),
-            );
-            let r = _mm256_sqrt_ps(d2);
-            let inv = _mm256_div_ps(one, r);
-            let (wx, wy, wz) = (_mm256_mul_ps(dx, inv), _mm256_mul_ps(dy, inv), _mm256_mul_ps(dz, inv));
-            let (ngxv, ngyv, ngzv) = (ld(ngx), ld(ngy), ld(ngz));
-            let cos_x = _mm256_xor_ps(dot(wx, wy, wz, ld(nsx), ld(nsy), ld(nsz)), sign);
-            let cos_g = _mm256_xor_ps(dot(wx, wy, wz, ngxv, ngyv, ngzv), sign);
-            let cos_v = dot(wx, wy, wz, ax, ay, az);
-            let faces = _mm256_and_ps(
-                _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(cos_x, zero),
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(cos_g, zero),
-                ),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(cos_v, zero),
-            );
-            if _mm256_movemask_ps(faces) == 0 {
-                continue;
-            }
-            let m2 = _mm256_max_ps(d2, clamp2);
-            let q = _mm256_div_ps(one, _mm256_mul_ps(cos_g, m2));
-            let g = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(cos_x, cos_v), cos_g), q);
-            let den = _mm256_add_ps(one, cos_v);
-            let iden = _mm256_div_ps(one, den);
-            let u = _mm256_mul_ps(dot(wx, wy, wz, tx, ty, tz), iden);
-            let v = _mm256_mul_ps(dot(wx, wy, wz, bx, by, bz), iden);
-            let margin = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(bias_k, den), r), _mm256_mul_ps(tol, r)),
-                _mm256_add_ps(e, _mm256_mul_ps(_mm256_mul_ps(e, m2), q)),
-            );
-            // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
-            let fx = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(u, one), half), zero), last);
-            let fy = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(one, v), half), zero), last);
-            let (ix, iy) = (_mm256_cvttps_epi32(fx), _mm256_cvttps_epi32(fy));
-            let idx = _mm256_add_epi32(_mm256_mullo_epi32(iy, res), ix);
-            let hidden = if DEPTH16 {
-                // SAFETY: facing lanes' indices are below `res^2`, and a 4-byte load at half
-                // float `idx` ends within the padded array; other lanes are masked off.
-                let word = unsafe {
-                    _mm256_mask_i32gather_epi32::<2>(
-                        _mm256_setzero_si256(),
-                        texels.cast(),
-                        idx,
-                        _mm256_castps_si256(faces),
-                    )
-                };
-                let packed = _mm256_packus_epi32(_mm256_and_si256(word, low16), _mm256_setzero_si256());
-                let halves = _mm256_castsi256_si128(_mm256_permute4x64_epi64::<0b1000>(packed));
-                let sv = _mm256_mul_ps(_mm256_cvtph_ps(halves), inv_scale);
-                // As `VplMap::hidden_at`: no divisions.
-                let u =
-                    _mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(ix), halfpx), inv2), one);
-                let v =
-                    _mm256_sub_ps(one, _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(iy), halfpx), inv2));
-                let r2 = _mm256_add_ps(_mm256_mul_ps(u, u), _mm256_mul_ps(v, v));
-                let d = _mm256_add_ps(one, r2);
-                let nt = dot(tx, ty, tz, ngxv, ngyv, ngzv);
-                let nb = dot(bx, by, bz, ngxv, ngyv, ngzv);
-                let na = dot(ax, ay, az, ngxv, ngyv, ngzv);
-                let cc = _mm256_xor_ps(
-                    _mm256_add_ps(
-                        _mm256_add_ps(
-                            _mm256_mul_ps(nt, _mm256_add_ps(u, u)),
-                            _mm256_mul_ps(nb, _mm256_add_ps(v, v)),
-                        ),
-                        _mm256_mul_ps(na, _mm256_sub_ps(one, r2)),
-                    ),
-                    sign,
-                );
-                let near = _mm256_cmp_ps::<_CMP_GT_OQ>(cc, _mm256_mul_ps(cos_g, d));
-                let own = _mm256_cmp_ps::<_CMP_GT_OQ>(
-                    _mm256_mul_ps(
-                        sv,
-                        _mm256_sub_ps(_mm256_mul_ps(_mm256_mul_ps(r, cos_g), d), _mm256_mul_ps(margin, cc)),
-                    ),
-                    cc,
-                );
-                let point = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sv, _mm256_sub_ps(r, margin)), one);
-                _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(sv, zero), _mm256_blendv_ps(point, own, near))
-            } else {
-                let idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
-                // SAFETY: facing lanes' indices are below `res^2`, so every gathered float lies
-                // within the `3 res^2` of `texels`; other lanes are masked off and not read.
-                let (gx, gy, gz) = unsafe {
-                    (
-                        _mm256_mask_i32gather_ps::<4>(zero, texels, idx3, faces),
-                        _mm256_mask_i32gather_ps::<4>(zero, texels.add(1), idx3, faces),
-                        _mm256_mask_i32gather_ps::<4>(zero, texels.add(2), idx3, faces),
-                    )
-                };
-                let sdot = dot(wx, wy, wz, gx, gy, gz);
-                _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(sdot, zero),
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_mul_ps(sdot, _mm256_sub_ps(r, margin)), one),
-                )
-            };
-            let g = _mm256_and_ps(_mm256_andnot_ps(hidden, faces), g);
-            for (acc, int) in [(&mut *sr, ir), (&mut *sg, ig), (&mut *sb, ib)] {
-                // SAFETY: as the loads above.
-                unsafe {
-                    let a = acc.as_mut_ptr().add(i);
-                    _mm256_storeu_ps(a, _mm256_add_ps(_mm256_loadu_ps(a), _mm256_mul_ps(int, g)));
-                }
-            }
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-mod avx512 {
+mod vector {
     use std::arch::x86_64::*;
 
     use super::{Points, Sums, VplConsts};
 
-    /// Points per vector.
-    pub(super) const LANES: usize = 16;
-
-    /// [`super::pair`] on sixteen points at once for the first `n` points (a multiple of 16),
-    /// summed into `sums`: texels are planes (three `f32` each) or, with `DEPTH16`, half floats.
+    /// The operations of the kernel on one instruction set's vectors: `F` of `f32` lanes, `I`
+    /// of `i32` lanes, and `M`, a lane mask. Every method is a single instruction or a short
+    /// sequence, inlined into the kernel's `#[target_feature]` entry point.
     ///
     /// # Safety
-    /// AVX-512F must be present; `texels` must point to `len` elements: `3 res^2` `f32`
-    /// for planes, or more than `res^2` `u16` for half floats (the padding element keeps a
-    /// 4-byte load at the last texel in bounds).
-    #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn add_vpl<const DEPTH16: bool>(
+    /// The methods may be called only where the CPU runs the instruction set.
+    pub(super) trait Lanes {
+        const N: usize;
+        type F: Copy;
+        type I: Copy;
+        type M: Copy;
+        unsafe fn set(x: f32) -> Self::F;
+        unsafe fn seti(x: i32) -> Self::I;
+        /// `N` floats from `p`, which must be readable.
+        unsafe fn load(p: *const f32) -> Self::F;
+        /// `N` floats to `p`, which must be writable.
+        unsafe fn store(p: *mut f32, v: Self::F);
+        unsafe fn add(a: Self::F, b: Self::F) -> Self::F;
+        unsafe fn sub(a: Self::F, b: Self::F) -> Self::F;
+        unsafe fn mul(a: Self::F, b: Self::F) -> Self::F;
+        unsafe fn div(a: Self::F, b: Self::F) -> Self::F;
+        unsafe fn sqrt(a: Self::F) -> Self::F;
+        /// `a < b ? a : b`, as the instruction: `b` where either is NaN.
+        unsafe fn min(a: Self::F, b: Self::F) -> Self::F;
+        /// `a > b ? a : b`, as the instruction: `b` where either is NaN.
+        unsafe fn max(a: Self::F, b: Self::F) -> Self::F;
+        /// The sign bit flipped.
+        unsafe fn neg(a: Self::F) -> Self::F;
+        /// `a > b`, ordered (false where either is NaN).
+        unsafe fn gt(a: Self::F, b: Self::F) -> Self::M;
+        unsafe fn and(a: Self::M, b: Self::M) -> Self::M;
+        /// `a & !b`.
+        unsafe fn and_not(a: Self::M, b: Self::M) -> Self::M;
+        unsafe fn or(a: Self::M, b: Self::M) -> Self::M;
+        unsafe fn any(m: Self::M) -> bool;
+        /// `v` where `m`, `+0.0` elsewhere.
+        unsafe fn keep(m: Self::M, v: Self::F) -> Self::F;
+        /// Truncation towards zero.
+        unsafe fn trunc(a: Self::F) -> Self::I;
+        unsafe fn to_f(a: Self::I) -> Self::F;
+        unsafe fn addi(a: Self::I, b: Self::I) -> Self::I;
+        unsafe fn muli(a: Self::I, b: Self::I) -> Self::I;
+        /// `base[idx]` where `m`, `0.0` elsewhere (not read).
+        unsafe fn gather(base: *const f32, idx: Self::I, m: Self::M) -> Self::F;
+        /// The half float `base[idx]` (a `u16` array; a 4-byte load there must be in bounds)
+        /// as `f32` where `m`, `0.0` elsewhere.
+        unsafe fn gather_half(base: *const u16, idx: Self::I, m: Self::M) -> Self::F;
+    }
+
+    /// AVX2 and F16C: eight lanes, masks as vectors of all-ones or zero lanes.
+    pub(super) struct Avx2;
+
+    /// AVX-512 F: sixteen lanes, masks as bit masks.
+    pub(super) struct Avx512;
+
+    impl Lanes for Avx2 {
+        const N: usize = 8;
+        type F = __m256;
+        type I = __m256i;
+        type M = __m256;
+        #[inline(always)]
+        unsafe fn set(x: f32) -> __m256 {
+            unsafe { _mm256_set1_ps(x) }
+        }
+        #[inline(always)]
+        unsafe fn seti(x: i32) -> __m256i {
+            unsafe { _mm256_set1_epi32(x) }
+        }
+        #[inline(always)]
+        unsafe fn load(p: *const f32) -> __m256 {
+            unsafe { _mm256_loadu_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(p: *mut f32, v: __m256) {
+            unsafe { _mm256_storeu_ps(p, v) }
+        }
+        #[inline(always)]
+        unsafe fn add(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_add_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn sub(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_sub_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn mul(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_mul_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn div(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_div_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn sqrt(a: __m256) -> __m256 {
+            unsafe { _mm256_sqrt_ps(a) }
+        }
+        #[inline(always)]
+        unsafe fn min(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_min_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn max(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_max_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn neg(a: __m256) -> __m256 {
+            unsafe { _mm256_xor_ps(a, _mm256_set1_ps(-0.0)) }
+        }
+        #[inline(always)]
+        unsafe fn gt(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn and(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_and_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn and_not(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_andnot_ps(b, a) }
+        }
+        #[inline(always)]
+        unsafe fn or(a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_or_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn any(m: __m256) -> bool {
+            unsafe { _mm256_movemask_ps(m) != 0 }
+        }
+        #[inline(always)]
+        unsafe fn keep(m: __m256, v: __m256) -> __m256 {
+            unsafe { _mm256_and_ps(m, v) }
+        }
+        #[inline(always)]
+        unsafe fn trunc(a: __m256) -> __m256i {
+            unsafe { _mm256_cvttps_epi32(a) }
+        }
+        #[inline(always)]
+        unsafe fn to_f(a: __m256i) -> __m256 {
+            unsafe { _mm256_cvtepi32_ps(a) }
+        }
+        #[inline(always)]
+        unsafe fn addi(a: __m256i, b: __m256i) -> __m256i {
+            unsafe { _mm256_add_epi32(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn muli(a: __m256i, b: __m256i) -> __m256i {
+            unsafe { _mm256_mullo_epi32(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn gather(base: *const f32, idx: __m256i, m: __m256) -> __m256 {
+            unsafe { _mm256_mask_i32gather_ps::<4>(_mm256_setzero_ps(), base, idx, m) }
+        }
+        #[inline(always)]
+        unsafe fn gather_half(base: *const u16, idx: __m256i, m: __m256) -> __m256 {
+            unsafe {
+                let word = _mm256_mask_i32gather_epi32::<2>(
+                    _mm256_setzero_si256(),
+                    base.cast(),
+                    idx,
+                    _mm256_castps_si256(m),
+                );
+                let low = _mm256_and_si256(word, _mm256_set1_epi32(0xffff));
+                let packed = _mm256_packus_epi32(low, _mm256_setzero_si256());
+                _mm256_cvtph_ps(_mm256_castsi256_si128(_mm256_permute4x64_epi64::<0b1000>(packed)))
+            }
+        }
+    }
+
+    impl Lanes for Avx512 {
+        const N: usize = 16;
+        type F = __m512;
+        type I = __m512i;
+        type M = __mmask16;
+        #[inline(always)]
+        unsafe fn set(x: f32) -> __m512 {
+            unsafe { _mm512_set1_ps(x) }
+        }
+        #[inline(always)]
+        unsafe fn seti(x: i32) -> __m512i {
+            unsafe { _mm512_set1_epi32(x) }
+        }
+        #[inline(always)]
+        unsafe fn load(p: *const f32) -> __m512 {
+            unsafe { _mm512_loadu_ps(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(p: *mut f32, v: __m512) {
+            unsafe { _mm512_storeu_ps(p, v) }
+        }
+        #[inline(always)]
+        unsafe fn add(a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_add_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn sub(a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_sub_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn mul(a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_mul_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn div(a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_div_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn sqrt(a: __m512) -> __m512 {
+            unsafe { _mm512_sqrt_ps(a) }
+        }
+        #[inline(always)]
+        unsafe fn min(a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_min_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn max(a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_max_ps(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn neg(a: __m512) -> __m512 {
+            unsafe {
+                let sign = _mm512_set1_epi32(i32::MIN);
+                _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a), sign))
+            }
+        }
+        #[inline(always)]
+        unsafe fn gt(a: __m512, b: __m512) -> __mmask16 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn and(a: __mmask16, b: __mmask16) -> __mmask16 {
+            a & b
+        }
+        #[inline(always)]
+        unsafe fn and_not(a: __mmask16, b: __mmask16) -> __mmask16 {
+            a & !b
+        }
+        #[inline(always)]
+        unsafe fn or(a: __mmask16, b: __mmask16) -> __mmask16 {
+            a | b
+        }
+        #[inline(always)]
+        unsafe fn any(m: __mmask16) -> bool {
+            m != 0
+        }
+        #[inline(always)]
+        unsafe fn keep(m: __mmask16, v: __m512) -> __m512 {
+            unsafe { _mm512_maskz_mov_ps(m, v) }
+        }
+        #[inline(always)]
+        unsafe fn trunc(a: __m512) -> __m512i {
+            unsafe { _mm512_cvttps_epi32(a) }
+        }
+        #[inline(always)]
+        unsafe fn to_f(a: __m512i) -> __m512 {
+            unsafe { _mm512_cvtepi32_ps(a) }
+        }
+        #[inline(always)]
+        unsafe fn addi(a: __m512i, b: __m512i) -> __m512i {
+            unsafe { _mm512_add_epi32(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn muli(a: __m512i, b: __m512i) -> __m512i {
+            unsafe { _mm512_mullo_epi32(a, b) }
+        }
+        #[inline(always)]
+        unsafe fn gather(base: *const f32, idx: __m512i, m: __mmask16) -> __m512 {
+            unsafe { _mm512_mask_i32gather_ps::<4>(_mm512_setzero_ps(), m, idx, base.cast()) }
+        }
+        #[inline(always)]
+        unsafe fn gather_half(base: *const u16, idx: __m512i, m: __mmask16) -> __m512 {
+            unsafe {
+                let word = _mm512_mask_i32gather_epi32::<2>(_mm512_setzero_si512(), m, idx, base.cast());
+                let halves = _mm512_cvtepi32_epi16(_mm512_and_si512(word, _mm512_set1_epi32(0xffff)));
+                _mm512_cvtph_ps(halves)
+            }
+        }
+    }
+
+    /// [`add_vpl`] with AVX2 and F16C.
+    ///
+    /// # Safety
+    /// As [`add_vpl`], on a CPU with AVX2 and F16C.
+    #[target_feature(enable = "avx2,f16c")]
+    pub(super) unsafe fn add_vpl_avx2<const DEPTH16: bool>(
         c: &VplConsts,
         texels: *const f32,
         len: usize,
@@ -476,125 +594,133 @@ mod avx512 {
         n: usize,
         sums: &mut Sums,
     ) {
-        assert!(n.is_multiple_of(LANES) && n <= pts.len() && sums.0.iter().all(|s| s.len() >= n));
+        unsafe { add_vpl::<Avx2, DEPTH16>(c, texels, len, pts, n, sums) }
+    }
+
+    /// [`add_vpl`] with AVX-512 (the F instructions, and F16C, which every AVX-512 CPU has).
+    ///
+    /// # Safety
+    /// As [`add_vpl`], on a CPU of the AVX-512 tier.
+    #[target_feature(enable = "avx2,f16c,avx512f")]
+    pub(super) unsafe fn add_vpl_avx512<const DEPTH16: bool>(
+        c: &VplConsts,
+        texels: *const f32,
+        len: usize,
+        pts: &Points,
+        n: usize,
+        sums: &mut Sums,
+    ) {
+        unsafe { add_vpl::<Avx512, DEPTH16>(c, texels, len, pts, n, sums) }
+    }
+
+    /// [`super::pair`] on `L::N` points at once for the first `n` points (a multiple of
+    /// `L::N`), summed into `sums`: texels are planes (three `f32` each) or, with `DEPTH16`,
+    /// half floats. The same `f32` operations as [`super::pair`], in its order.
+    ///
+    /// # Safety
+    /// The CPU must run `L`'s instructions; `texels` must point to `len` elements: `3 res^2`
+    /// `f32` for planes, or more than `res^2` `u16` for half floats (the padding element keeps
+    /// a 4-byte load at the last texel in bounds).
+    #[inline(always)]
+    unsafe fn add_vpl<L: Lanes, const DEPTH16: bool>(
+        c: &VplConsts,
+        texels: *const f32,
+        len: usize,
+        pts: &Points,
+        n: usize,
+        sums: &mut Sums,
+    ) {
+        assert!(n.is_multiple_of(L::N) && n <= pts.len() && sums.0.iter().all(|s| s.len() >= n));
         let texels_n = c.res as usize * c.res as usize;
         assert!(if DEPTH16 { len > texels_n } else { len == 3 * texels_n });
-        let s = _mm512_set1_ps;
-        let (ox, oy, oz) = (s(c.o.x), s(c.o.y), s(c.o.z));
-        let (tx, ty, tz) = (s(c.t.x), s(c.t.y), s(c.t.z));
-        let (bx, by, bz) = (s(c.b.x), s(c.b.y), s(c.b.z));
-        let (ax, ay, az) = (s(c.a.x), s(c.a.y), s(c.a.z));
-        let (ir, ig, ib) = (s(c.intensity.x), s(c.intensity.y), s(c.intensity.z));
-        let (clamp2, bias_k, e, half, last) = (s(c.clamp2), s(c.bias_k), s(c.e), s(c.half), s(c.last));
-        let (zero, one, tol) = (s(0.0), s(1.0), s(c.tol));
-        let sign = _mm512_set1_epi32(i32::MIN);
-        let neg = |x: __m512| _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(x), sign));
-        let (inv_scale, inv2, halfpx) = (s(c.inv_scale), s(2.0 / c.res as f32), s(0.5));
-        let res = _mm512_set1_epi32(c.res as i32);
-        let low16 = _mm512_set1_epi32(0xffff);
-        let dot = |x: __m512, y: __m512, z: __m512, a: __m512, b: __m512, c: __m512| {
-            _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(a, x), _mm512_mul_ps(b, y)), _mm512_mul_ps(c, z))
-        };
-        let [px, py, pz] = &pts.p;
-        let [nsx, nsy, nsz] = &pts.ns;
-        let [ngx, ngy, ngz] = &pts.ng;
-        let [sr, sg, sb] = &mut sums.0;
-        for i in (0..n).step_by(LANES) {
-            // SAFETY (all loads and stores of the loop): `i + 16 <= n`, within every array.
-            let ld = |v: &[f32]| unsafe { _mm512_loadu_ps(v.as_ptr().add(i)) };
-            let dx = _mm512_sub_ps(ld(px), ox);
-            let dy = _mm512_sub_ps(ld(py), oy);
-            let dz = _mm512_sub_ps(ld(pz), oz);
-            let d2 = _mm512_add_ps(
-                _mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)),
-                _mm512_mul_ps(dz, dz),
-            );
-            let r = _mm512_sqrt_ps(d2);
-            let inv = _mm512_div_ps(one, r);
-            let (wx, wy, wz) = (_mm512_mul_ps(dx, inv), _mm512_mul_ps(dy, inv), _mm512_mul_ps(dz, inv));
-            let (ngxv, ngyv, ngzv) = (ld(ngx), ld(ngy), ld(ngz));
-            let cos_x = neg(dot(wx, wy, wz, ld(nsx), ld(nsy), ld(nsz)));
-            let cos_g = neg(dot(wx, wy, wz, ngxv, ngyv, ngzv));
-            let cos_v = dot(wx, wy, wz, ax, ay, az);
-            let faces = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos_x, zero)
-                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos_g, zero)
-                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos_v, zero);
-            if faces == 0 {
-                continue;
-            }
-            let m2 = _mm512_max_ps(d2, clamp2);
-            let q = _mm512_div_ps(one, _mm512_mul_ps(cos_g, m2));
-            let g = _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(cos_x, cos_v), cos_g), q);
-            let den = _mm512_add_ps(one, cos_v);
-            let iden = _mm512_div_ps(one, den);
-            let u = _mm512_mul_ps(dot(wx, wy, wz, tx, ty, tz), iden);
-            let v = _mm512_mul_ps(dot(wx, wy, wz, bx, by, bz), iden);
-            let margin = _mm512_add_ps(
-                _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(bias_k, den), r), _mm512_mul_ps(tol, r)),
-                _mm512_add_ps(e, _mm512_mul_ps(_mm512_mul_ps(e, m2), q)),
-            );
-            // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
-            let fx = _mm512_min_ps(_mm512_max_ps(_mm512_mul_ps(_mm512_add_ps(u, one), half), zero), last);
-            let fy = _mm512_min_ps(_mm512_max_ps(_mm512_mul_ps(_mm512_sub_ps(one, v), half), zero), last);
-            let (ix, iy) = (_mm512_cvttps_epi32(fx), _mm512_cvttps_epi32(fy));
-            let idx = _mm512_add_epi32(_mm512_mullo_epi32(iy, res), ix);
-            let hidden = if DEPTH16 {
-                // SAFETY: facing lanes' indices are below `res^2`, and a 4-byte load at half
-                // float `idx` ends within the padded array; other lanes are masked off.
-                let word = unsafe {
-                    _mm512_mask_i32gather_epi32::<2>(_mm512_setzero_si512(), faces, idx, texels.cast())
-                };
-                let halves = _mm512_cvtepi32_epi16(_mm512_and_si512(word, low16));
-                let sv = _mm512_mul_ps(_mm512_cvtph_ps(halves), inv_scale);
-                // As `VplMap::hidden_at`: no divisions.
-                let u =
-                    _mm512_sub_ps(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(ix), halfpx), inv2), one);
-                let v =
-                    _mm512_sub_ps(one, _mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(iy), halfpx), inv2));
-                let r2 = _mm512_add_ps(_mm512_mul_ps(u, u), _mm512_mul_ps(v, v));
-                let d = _mm512_add_ps(one, r2);
-                let nt = dot(tx, ty, tz, ngxv, ngyv, ngzv);
-                let nb = dot(bx, by, bz, ngxv, ngyv, ngzv);
-                let na = dot(ax, ay, az, ngxv, ngyv, ngzv);
-                let cc = neg(_mm512_add_ps(
-                    _mm512_add_ps(
-                        _mm512_mul_ps(nt, _mm512_add_ps(u, u)),
-                        _mm512_mul_ps(nb, _mm512_add_ps(v, v)),
-                    ),
-                    _mm512_mul_ps(na, _mm512_sub_ps(one, r2)),
-                ));
-                let near = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cc, _mm512_mul_ps(cos_g, d));
-                let own = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(
-                    _mm512_mul_ps(
-                        sv,
-                        _mm512_sub_ps(_mm512_mul_ps(_mm512_mul_ps(r, cos_g), d), _mm512_mul_ps(margin, cc)),
-                    ),
-                    cc,
-                );
-                let point =
-                    _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_mul_ps(sv, _mm512_sub_ps(r, margin)), one);
-                _mm512_cmp_ps_mask::<_CMP_GT_OQ>(sv, zero) & ((own & near) | (point & !near))
-            } else {
-                let idx3 = _mm512_add_epi32(_mm512_add_epi32(idx, idx), idx);
-                // SAFETY: facing lanes' indices are below `res^2`, so every gathered float lies
-                // within the `3 res^2` of `texels`; other lanes are masked off and not read.
-                let (gx, gy, gz) = unsafe {
-                    (
-                        _mm512_mask_i32gather_ps::<4>(zero, faces, idx3, texels.cast()),
-                        _mm512_mask_i32gather_ps::<4>(zero, faces, idx3, texels.add(1).cast()),
-                        _mm512_mask_i32gather_ps::<4>(zero, faces, idx3, texels.add(2).cast()),
-                    )
-                };
-                let sdot = dot(wx, wy, wz, gx, gy, gz);
-                _mm512_cmp_ps_mask::<_CMP_GT_OQ>(sdot, zero)
-                    & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_mul_ps(sdot, _mm512_sub_ps(r, margin)), one)
+        // SAFETY (the whole body): the caller guarantees the instruction set; the loads and
+        // stores stay within the first `n` points (asserted above), the gathers within the map
+        // (see each).
+        unsafe {
+            let s = |x: f32| L::set(x);
+            let (ox, oy, oz) = (s(c.o.x), s(c.o.y), s(c.o.z));
+            let (tx, ty, tz) = (s(c.t.x), s(c.t.y), s(c.t.z));
+            let (bx, by, bz) = (s(c.b.x), s(c.b.y), s(c.b.z));
+            let (ax, ay, az) = (s(c.a.x), s(c.a.y), s(c.a.z));
+            let (ir, ig, ib) = (s(c.intensity.x), s(c.intensity.y), s(c.intensity.z));
+            let (clamp2, bias_k, e, half, last) = (s(c.clamp2), s(c.bias_k), s(c.e), s(c.half), s(c.last));
+            let (zero, one, tol) = (s(0.0), s(1.0), s(c.tol));
+            let (inv_scale, inv2, halfpx) = (s(c.inv_scale), s(2.0 / c.res as f32), s(0.5));
+            let res = L::seti(c.res as i32);
+            let dot = |x: L::F, y: L::F, z: L::F, a: L::F, b: L::F, c: L::F| {
+                L::add(L::add(L::mul(a, x), L::mul(b, y)), L::mul(c, z))
             };
-            let g = _mm512_maskz_mov_ps(faces & !hidden, g);
-            for (acc, int) in [(&mut *sr, ir), (&mut *sg, ig), (&mut *sb, ib)] {
-                // SAFETY: as the loads above.
-                unsafe {
+            let [px, py, pz] = &pts.p;
+            let [nsx, nsy, nsz] = &pts.ns;
+            let [ngx, ngy, ngz] = &pts.ng;
+            let [sr, sg, sb] = &mut sums.0;
+            for i in (0..n).step_by(L::N) {
+                let ld = |v: &[f32]| L::load(v.as_ptr().add(i));
+                let dx = L::sub(ld(px), ox);
+                let dy = L::sub(ld(py), oy);
+                let dz = L::sub(ld(pz), oz);
+                let d2 = L::add(L::add(L::mul(dx, dx), L::mul(dy, dy)), L::mul(dz, dz));
+                let r = L::sqrt(d2);
+                let inv = L::div(one, r);
+                let (wx, wy, wz) = (L::mul(dx, inv), L::mul(dy, inv), L::mul(dz, inv));
+                let (ngxv, ngyv, ngzv) = (ld(ngx), ld(ngy), ld(ngz));
+                let cos_x = L::neg(dot(wx, wy, wz, ld(nsx), ld(nsy), ld(nsz)));
+                let cos_g = L::neg(dot(wx, wy, wz, ngxv, ngyv, ngzv));
+                let cos_v = dot(wx, wy, wz, ax, ay, az);
+                let faces = L::and(L::and(L::gt(cos_x, zero), L::gt(cos_g, zero)), L::gt(cos_v, zero));
+                if !L::any(faces) {
+                    continue;
+                }
+                let m2 = L::max(d2, clamp2);
+                let q = L::div(one, L::mul(cos_g, m2));
+                let g = L::mul(L::mul(L::mul(cos_x, cos_v), cos_g), q);
+                let den = L::add(one, cos_v);
+                let iden = L::div(one, den);
+                let u = L::mul(dot(wx, wy, wz, tx, ty, tz), iden);
+                let v = L::mul(dot(wx, wy, wz, bx, by, bz), iden);
+                let margin = L::add(
+                    L::add(L::mul(L::mul(bias_k, den), r), L::mul(tol, r)),
+                    L::add(e, L::mul(L::mul(e, m2), q)),
+                );
+                // `max(x, 0)` first, as `f32::max`: a NaN becomes 0 (the second operand).
+                let fx = L::min(L::max(L::mul(L::add(u, one), half), zero), last);
+                let fy = L::min(L::max(L::mul(L::sub(one, v), half), zero), last);
+                let (ix, iy) = (L::trunc(fx), L::trunc(fy));
+                let idx = L::addi(L::muli(iy, res), ix);
+                let hidden = if DEPTH16 {
+                    // Facing lanes' indices are below `res^2`, and a 4-byte load at half float
+                    // `idx` ends within the padded array; other lanes are masked off.
+                    let sv = L::mul(L::gather_half(texels.cast(), idx, faces), inv_scale);
+                    // As `VplMap::hidden_at`: no divisions.
+                    let u = L::sub(L::mul(L::add(L::to_f(ix), halfpx), inv2), one);
+                    let v = L::sub(one, L::mul(L::add(L::to_f(iy), halfpx), inv2));
+                    let r2 = L::add(L::mul(u, u), L::mul(v, v));
+                    let d = L::add(one, r2);
+                    let nt = dot(tx, ty, tz, ngxv, ngyv, ngzv);
+                    let nb = dot(bx, by, bz, ngxv, ngyv, ngzv);
+                    let na = dot(ax, ay, az, ngxv, ngyv, ngzv);
+                    let cc = L::neg(L::add(
+                        L::add(L::mul(nt, L::add(u, u)), L::mul(nb, L::add(v, v))),
+                        L::mul(na, L::sub(one, r2)),
+                    ));
+                    let near = L::gt(cc, L::mul(cos_g, d));
+                    let own = L::gt(L::mul(sv, L::sub(L::mul(L::mul(r, cos_g), d), L::mul(margin, cc))), cc);
+                    let point = L::gt(L::mul(sv, L::sub(r, margin)), one);
+                    L::and(L::gt(sv, zero), L::or(L::and(own, near), L::and_not(point, near)))
+                } else {
+                    // Facing lanes' indices are below `res^2`, so every gathered float lies
+                    // within the `3 res^2` of `texels`; other lanes are masked off and not read.
+                    let idx3 = L::addi(L::addi(idx, idx), idx);
+                    let gx = L::gather(texels, idx3, faces);
+                    let gy = L::gather(texels.add(1), idx3, faces);
+                    let gz = L::gather(texels.add(2), idx3, faces);
+                    let sdot = dot(wx, wy, wz, gx, gy, gz);
+                    L::and(L::gt(sdot, zero), L::gt(L::mul(sdot, L::sub(r, margin)), one))
+                };
+                let g = L::keep(L::and_not(faces, hidden), g);
+                for (acc, int) in [(&mut *sr, ir), (&mut *sg, ig), (&mut *sb, ib)] {
                     let a = acc.as_mut_ptr().add(i);
-                    _mm512_storeu_ps(a, _mm512_add_ps(_mm512_loadu_ps(a), _mm512_mul_ps(int, g)));
+                    L::store(a, L::add(L::load(a), L::mul(int, g)));
                 }
             }
         }

@@ -248,7 +248,7 @@ pub(crate) fn add_vpl_on(isa: Isa, c: &VplConsts, map: &VplMap, pts: &Points, su
         // SAFETY: an `Isa` of a tier exists only where the CPU runs it; the kernels' loads stay
         // within the first `done` points of `pts` and `sums` (asserted there) and their gathers
         // within the map's texels (indices clamped to the resolution; see each kernel).
-        use vector::{Avx2, Avx512, Lanes};
+        use hyrt_simd::lanes::{Avx2, Avx512, Lanes};
         let whole = |n: usize| pts.len() / n * n;
         unsafe {
             match (isa.tier(), planes, depths) {
@@ -303,158 +303,21 @@ mod vector {
 
     use super::{Points, Sums, VplConsts};
 
-    /// The operations of the kernel on one instruction set's vectors: `F` of `f32` lanes, `I`
-    /// of `i32` lanes, and `M`, a lane mask. Every method is a single instruction or a short
-    /// sequence, inlined into the kernel's `#[target_feature]` entry point.
+    use hyrt_simd::lanes::{Avx2, Avx512, Lanes as Base};
+
+    /// The lane operations of the tier ([`Base`], shared with the tracer's kernels), and the
+    /// one only this kernel needs.
     ///
     /// # Safety
-    /// The methods may be called only where the CPU runs the instruction set.
-    pub(super) trait Lanes {
-        const N: usize;
-        type F: Copy;
-        type I: Copy;
-        type M: Copy;
-        unsafe fn set(x: f32) -> Self::F;
-        unsafe fn seti(x: i32) -> Self::I;
-        /// `N` floats from `p`, which must be readable.
-        unsafe fn load(p: *const f32) -> Self::F;
-        /// `N` floats to `p`, which must be writable.
-        unsafe fn store(p: *mut f32, v: Self::F);
-        unsafe fn add(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn sub(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn mul(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn div(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn sqrt(a: Self::F) -> Self::F;
-        /// `a < b ? a : b`, as the instruction: `b` where either is NaN.
-        unsafe fn min(a: Self::F, b: Self::F) -> Self::F;
-        /// `a > b ? a : b`, as the instruction: `b` where either is NaN.
-        unsafe fn max(a: Self::F, b: Self::F) -> Self::F;
-        /// The sign bit flipped.
-        unsafe fn neg(a: Self::F) -> Self::F;
-        /// `a > b`, ordered (false where either is NaN).
-        unsafe fn gt(a: Self::F, b: Self::F) -> Self::M;
-        unsafe fn and(a: Self::M, b: Self::M) -> Self::M;
-        /// `a & !b`.
-        unsafe fn and_not(a: Self::M, b: Self::M) -> Self::M;
-        unsafe fn or(a: Self::M, b: Self::M) -> Self::M;
-        unsafe fn any(m: Self::M) -> bool;
-        /// `v` where `m`, `+0.0` elsewhere.
-        unsafe fn keep(m: Self::M, v: Self::F) -> Self::F;
-        /// Truncation towards zero.
-        unsafe fn trunc(a: Self::F) -> Self::I;
-        unsafe fn to_f(a: Self::I) -> Self::F;
-        unsafe fn addi(a: Self::I, b: Self::I) -> Self::I;
-        unsafe fn muli(a: Self::I, b: Self::I) -> Self::I;
-        /// `base[idx]` where `m`, `0.0` elsewhere (not read).
-        unsafe fn gather(base: *const f32, idx: Self::I, m: Self::M) -> Self::F;
+    /// As [`Base`]: the methods may be called only where the CPU runs the tier, from the
+    /// kernel's `#[target_feature]` entry points, into which they are inlined.
+    pub(super) trait Lanes: Base {
         /// The half float `base[idx]` (a `u16` array; a 4-byte load there must be in bounds)
         /// as `f32` where `m`, `0.0` elsewhere.
         unsafe fn gather_half(base: *const u16, idx: Self::I, m: Self::M) -> Self::F;
     }
 
-    /// AVX2 and F16C: eight lanes, masks as vectors of all-ones or zero lanes.
-    pub(super) struct Avx2;
-
-    /// AVX-512 F: sixteen lanes, masks as bit masks.
-    pub(super) struct Avx512;
-
     impl Lanes for Avx2 {
-        const N: usize = 8;
-        type F = __m256;
-        type I = __m256i;
-        type M = __m256;
-        #[inline(always)]
-        unsafe fn set(x: f32) -> __m256 {
-            unsafe { _mm256_set1_ps(x) }
-        }
-        #[inline(always)]
-        unsafe fn seti(x: i32) -> __m256i {
-            unsafe { _mm256_set1_epi32(x) }
-        }
-        #[inline(always)]
-        unsafe fn load(p: *const f32) -> __m256 {
-            unsafe { _mm256_loadu_ps(p) }
-        }
-        #[inline(always)]
-        unsafe fn store(p: *mut f32, v: __m256) {
-            unsafe { _mm256_storeu_ps(p, v) }
-        }
-        #[inline(always)]
-        unsafe fn add(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_add_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn sub(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_sub_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn mul(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_mul_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn div(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_div_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn sqrt(a: __m256) -> __m256 {
-            unsafe { _mm256_sqrt_ps(a) }
-        }
-        #[inline(always)]
-        unsafe fn min(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_min_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn max(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_max_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn neg(a: __m256) -> __m256 {
-            unsafe { _mm256_xor_ps(a, _mm256_set1_ps(-0.0)) }
-        }
-        #[inline(always)]
-        unsafe fn gt(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn and(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_and_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn and_not(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_andnot_ps(b, a) }
-        }
-        #[inline(always)]
-        unsafe fn or(a: __m256, b: __m256) -> __m256 {
-            unsafe { _mm256_or_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn any(m: __m256) -> bool {
-            unsafe { _mm256_movemask_ps(m) != 0 }
-        }
-        #[inline(always)]
-        unsafe fn keep(m: __m256, v: __m256) -> __m256 {
-            unsafe { _mm256_and_ps(m, v) }
-        }
-        #[inline(always)]
-        unsafe fn trunc(a: __m256) -> __m256i {
-            unsafe { _mm256_cvttps_epi32(a) }
-        }
-        #[inline(always)]
-        unsafe fn to_f(a: __m256i) -> __m256 {
-            unsafe { _mm256_cvtepi32_ps(a) }
-        }
-        #[inline(always)]
-        unsafe fn addi(a: __m256i, b: __m256i) -> __m256i {
-            unsafe { _mm256_add_epi32(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn muli(a: __m256i, b: __m256i) -> __m256i {
-            unsafe { _mm256_mullo_epi32(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn gather(base: *const f32, idx: __m256i, m: __m256) -> __m256 {
-            unsafe { _mm256_mask_i32gather_ps::<4>(_mm256_setzero_ps(), base, idx, m) }
-        }
         #[inline(always)]
         unsafe fn gather_half(base: *const u16, idx: __m256i, m: __m256) -> __m256 {
             unsafe {
@@ -472,105 +335,6 @@ mod vector {
     }
 
     impl Lanes for Avx512 {
-        const N: usize = 16;
-        type F = __m512;
-        type I = __m512i;
-        type M = __mmask16;
-        #[inline(always)]
-        unsafe fn set(x: f32) -> __m512 {
-            unsafe { _mm512_set1_ps(x) }
-        }
-        #[inline(always)]
-        unsafe fn seti(x: i32) -> __m512i {
-            unsafe { _mm512_set1_epi32(x) }
-        }
-        #[inline(always)]
-        unsafe fn load(p: *const f32) -> __m512 {
-            unsafe { _mm512_loadu_ps(p) }
-        }
-        #[inline(always)]
-        unsafe fn store(p: *mut f32, v: __m512) {
-            unsafe { _mm512_storeu_ps(p, v) }
-        }
-        #[inline(always)]
-        unsafe fn add(a: __m512, b: __m512) -> __m512 {
-            unsafe { _mm512_add_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn sub(a: __m512, b: __m512) -> __m512 {
-            unsafe { _mm512_sub_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn mul(a: __m512, b: __m512) -> __m512 {
-            unsafe { _mm512_mul_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn div(a: __m512, b: __m512) -> __m512 {
-            unsafe { _mm512_div_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn sqrt(a: __m512) -> __m512 {
-            unsafe { _mm512_sqrt_ps(a) }
-        }
-        #[inline(always)]
-        unsafe fn min(a: __m512, b: __m512) -> __m512 {
-            unsafe { _mm512_min_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn max(a: __m512, b: __m512) -> __m512 {
-            unsafe { _mm512_max_ps(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn neg(a: __m512) -> __m512 {
-            unsafe {
-                let sign = _mm512_set1_epi32(i32::MIN);
-                _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a), sign))
-            }
-        }
-        #[inline(always)]
-        unsafe fn gt(a: __m512, b: __m512) -> __mmask16 {
-            unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn and(a: __mmask16, b: __mmask16) -> __mmask16 {
-            a & b
-        }
-        #[inline(always)]
-        unsafe fn and_not(a: __mmask16, b: __mmask16) -> __mmask16 {
-            a & !b
-        }
-        #[inline(always)]
-        unsafe fn or(a: __mmask16, b: __mmask16) -> __mmask16 {
-            a | b
-        }
-        #[inline(always)]
-        unsafe fn any(m: __mmask16) -> bool {
-            m != 0
-        }
-        #[inline(always)]
-        unsafe fn keep(m: __mmask16, v: __m512) -> __m512 {
-            unsafe { _mm512_maskz_mov_ps(m, v) }
-        }
-        #[inline(always)]
-        unsafe fn trunc(a: __m512) -> __m512i {
-            unsafe { _mm512_cvttps_epi32(a) }
-        }
-        #[inline(always)]
-        unsafe fn to_f(a: __m512i) -> __m512 {
-            unsafe { _mm512_cvtepi32_ps(a) }
-        }
-        #[inline(always)]
-        unsafe fn addi(a: __m512i, b: __m512i) -> __m512i {
-            unsafe { _mm512_add_epi32(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn muli(a: __m512i, b: __m512i) -> __m512i {
-            unsafe { _mm512_mullo_epi32(a, b) }
-        }
-        #[inline(always)]
-        unsafe fn gather(base: *const f32, idx: __m512i, m: __mmask16) -> __m512 {
-            unsafe { _mm512_mask_i32gather_ps::<4>(_mm512_setzero_ps(), m, idx, base.cast()) }
-        }
         #[inline(always)]
         unsafe fn gather_half(base: *const u16, idx: __m512i, m: __mmask16) -> __m512 {
             unsafe {
@@ -637,7 +401,7 @@ mod vector {
         // stores stay within the first `n` points (asserted above), the gathers within the map
         // (see each).
         unsafe {
-            let s = |x: f32| L::set(x);
+            let s = |x: f32| L::splat(x);
             let (ox, oy, oz) = (s(c.o.x), s(c.o.y), s(c.o.z));
             let (tx, ty, tz) = (s(c.t.x), s(c.t.y), s(c.t.z));
             let (bx, by, bz) = (s(c.b.x), s(c.b.y), s(c.b.z));
@@ -646,7 +410,7 @@ mod vector {
             let (clamp2, bias_k, e, half, last) = (s(c.clamp2), s(c.bias_k), s(c.e), s(c.half), s(c.last));
             let (zero, one, tol) = (s(0.0), s(1.0), s(c.tol));
             let (inv_scale, inv2, halfpx) = (s(c.inv_scale), s(2.0 / c.res as f32), s(0.5));
-            let res = L::seti(c.res as i32);
+            let res = L::splat_i(c.res as i32);
             let dot = |x: L::F, y: L::F, z: L::F, a: L::F, b: L::F, c: L::F| {
                 L::add(L::add(L::mul(a, x), L::mul(b, y)), L::mul(c, z))
             };
@@ -686,7 +450,7 @@ mod vector {
                 let fx = L::min(L::max(L::mul(L::add(u, one), half), zero), last);
                 let fy = L::min(L::max(L::mul(L::sub(one, v), half), zero), last);
                 let (ix, iy) = (L::trunc(fx), L::trunc(fy));
-                let idx = L::addi(L::muli(iy, res), ix);
+                let idx = L::add_i(L::mul_i(iy, res), ix);
                 let hidden = if DEPTH16 {
                     // Facing lanes' indices are below `res^2`, and a 4-byte load at half float
                     // `idx` ends within the padded array; other lanes are masked off.
@@ -710,7 +474,7 @@ mod vector {
                 } else {
                     // Facing lanes' indices are below `res^2`, so every gathered float lies
                     // within the `3 res^2` of `texels`; other lanes are masked off and not read.
-                    let idx3 = L::addi(L::addi(idx, idx), idx);
+                    let idx3 = L::add_i(L::add_i(idx, idx), idx);
                     let gx = L::gather(texels, idx3, faces);
                     let gy = L::gather(texels.add(1), idx3, faces);
                     let gz = L::gather(texels.add(2), idx3, faces);

@@ -143,43 +143,17 @@ mod x86 {
 
     use super::*;
 
-    /// The lane operations the kernel needs. Float operations are the IEEE ones of the same
-    /// name (correctly rounded); comparisons are ordered (false when either side is NaN).
+    pub(super) use hyrt_simd::lanes::{Avx2, Avx512, Lanes as Base};
+
+    /// The lane operations of the tier ([`Base`], shared with the other kernels), and those
+    /// only this kernel needs: triangle ids and the vertex gathers.
     ///
     /// # Safety
-    /// Every method may only be called from a function compiled with the implementation's
+    /// As [`Base`]: every method may only be called from a function compiled with the tier's
     /// target features (the two `row_*` entry points below), where they are inlined.
-    pub(super) trait Lanes {
-        /// Lanes per vector.
-        const N: usize;
-        /// `N` f32 values.
-        type F: Copy;
-        /// `N` u32 ids.
-        type I: Copy;
-        /// A lane mask.
-        type M: Copy;
+    pub(super) trait Lanes: Base {
         /// `[f32; N]`.
         type A: Copy + std::ops::Index<usize, Output = f32>;
-        unsafe fn splat(x: f32) -> Self::F;
-        unsafe fn add(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn sub(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn mul(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn div(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn sqrt(a: Self::F) -> Self::F;
-        unsafe fn abs(a: Self::F) -> Self::F;
-        unsafe fn neg(a: Self::F) -> Self::F;
-        /// Equal to `f32::max` when neither side is NaN.
-        unsafe fn max(a: Self::F, b: Self::F) -> Self::F;
-        unsafe fn lt(a: Self::F, b: Self::F) -> Self::M;
-        unsafe fn le(a: Self::F, b: Self::F) -> Self::M;
-        unsafe fn ge(a: Self::F, b: Self::F) -> Self::M;
-        unsafe fn ne(a: Self::F, b: Self::F) -> Self::M;
-        unsafe fn and(a: Self::M, b: Self::M) -> Self::M;
-        unsafe fn or(a: Self::M, b: Self::M) -> Self::M;
-        /// `a` where `m`, else `b`.
-        unsafe fn select(m: Self::M, a: Self::F, b: Self::F) -> Self::F;
-        /// Bit `i` set when lane `i` of `m` is.
-        unsafe fn bits(m: Self::M) -> u32;
         /// `N` ids from `p`.
         unsafe fn load_ids(p: *const u32) -> Self::I;
         /// Lanes whose id is at most `last`.
@@ -190,92 +164,18 @@ mod x86 {
         /// lanes without a triangle still read valid memory.
         unsafe fn vertex_index(ids: Self::I, last: u32) -> Self::I;
         /// `base[index + k]` per lane.
-        unsafe fn gather<const K: usize>(base: *const f32, index: Self::I) -> Self::F;
+        unsafe fn vertex<const K: usize>(base: *const f32, index: Self::I) -> Self::F;
         /// `x0 + i` in lane `i`, as f32 (exact below 2^24).
         unsafe fn columns(x0: u32) -> Self::F;
         /// The lanes as an array (`[f32; N]`).
         unsafe fn to_array(a: Self::F) -> Self::A;
     }
 
-    pub(super) struct Avx2;
-
-    // Each method is one intrinsic or two; the trait's contract (the target features) is what
-    // makes them sound, so per-call `unsafe` blocks would add nothing.
+    // Each method is one intrinsic or a few; the trait's contract (the target features) is
+    // what makes them sound, so per-call `unsafe` blocks would add nothing.
     #[allow(unsafe_op_in_unsafe_fn)]
     impl Lanes for Avx2 {
-        const N: usize = 8;
-        type F = __m256;
-        type I = __m256i;
-        type M = __m256;
         type A = [f32; 8];
-        #[inline(always)]
-        unsafe fn splat(x: f32) -> __m256 {
-            _mm256_set1_ps(x)
-        }
-        #[inline(always)]
-        unsafe fn add(a: __m256, b: __m256) -> __m256 {
-            _mm256_add_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn sub(a: __m256, b: __m256) -> __m256 {
-            _mm256_sub_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn mul(a: __m256, b: __m256) -> __m256 {
-            _mm256_mul_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn div(a: __m256, b: __m256) -> __m256 {
-            _mm256_div_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn sqrt(a: __m256) -> __m256 {
-            _mm256_sqrt_ps(a)
-        }
-        #[inline(always)]
-        unsafe fn abs(a: __m256) -> __m256 {
-            _mm256_andnot_ps(_mm256_set1_ps(-0.0), a)
-        }
-        #[inline(always)]
-        unsafe fn neg(a: __m256) -> __m256 {
-            _mm256_xor_ps(_mm256_set1_ps(-0.0), a)
-        }
-        #[inline(always)]
-        unsafe fn max(a: __m256, b: __m256) -> __m256 {
-            _mm256_max_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn lt(a: __m256, b: __m256) -> __m256 {
-            _mm256_cmp_ps::<_CMP_LT_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn le(a: __m256, b: __m256) -> __m256 {
-            _mm256_cmp_ps::<_CMP_LE_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn ge(a: __m256, b: __m256) -> __m256 {
-            _mm256_cmp_ps::<_CMP_GE_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn ne(a: __m256, b: __m256) -> __m256 {
-            _mm256_cmp_ps::<_CMP_NEQ_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn and(a: __m256, b: __m256) -> __m256 {
-            _mm256_and_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn or(a: __m256, b: __m256) -> __m256 {
-            _mm256_or_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn select(m: __m256, a: __m256, b: __m256) -> __m256 {
-            _mm256_blendv_ps(b, a, m)
-        }
-        #[inline(always)]
-        unsafe fn bits(m: __m256) -> u32 {
-            _mm256_movemask_ps(m) as u32
-        }
         #[inline(always)]
         unsafe fn load_ids(p: *const u32) -> __m256i {
             _mm256_loadu_si256(p.cast())
@@ -296,7 +196,7 @@ mod x86 {
             _mm256_add_epi32(_mm256_slli_epi32::<3>(i), i)
         }
         #[inline(always)]
-        unsafe fn gather<const K: usize>(base: *const f32, index: __m256i) -> __m256 {
+        unsafe fn vertex<const K: usize>(base: *const f32, index: __m256i) -> __m256 {
             _mm256_i32gather_ps::<4>(base.add(K), index)
         }
         #[inline(always)]
@@ -310,85 +210,9 @@ mod x86 {
         }
     }
 
-    pub(super) struct Avx512;
-
-    // Each method is one intrinsic or two; the trait's contract (the target features) is what
-    // makes them sound, so per-call `unsafe` blocks would add nothing.
     #[allow(unsafe_op_in_unsafe_fn)]
     impl Lanes for Avx512 {
-        const N: usize = 16;
-        type F = __m512;
-        type I = __m512i;
-        type M = __mmask16;
         type A = [f32; 16];
-        #[inline(always)]
-        unsafe fn splat(x: f32) -> __m512 {
-            _mm512_set1_ps(x)
-        }
-        #[inline(always)]
-        unsafe fn add(a: __m512, b: __m512) -> __m512 {
-            _mm512_add_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn sub(a: __m512, b: __m512) -> __m512 {
-            _mm512_sub_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn mul(a: __m512, b: __m512) -> __m512 {
-            _mm512_mul_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn div(a: __m512, b: __m512) -> __m512 {
-            _mm512_div_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn sqrt(a: __m512) -> __m512 {
-            _mm512_sqrt_ps(a)
-        }
-        #[inline(always)]
-        unsafe fn abs(a: __m512) -> __m512 {
-            _mm512_abs_ps(a)
-        }
-        #[inline(always)]
-        unsafe fn neg(a: __m512) -> __m512 {
-            _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a), _mm512_set1_epi32(i32::MIN)))
-        }
-        #[inline(always)]
-        unsafe fn max(a: __m512, b: __m512) -> __m512 {
-            _mm512_max_ps(a, b)
-        }
-        #[inline(always)]
-        unsafe fn lt(a: __m512, b: __m512) -> __mmask16 {
-            _mm512_cmp_ps_mask::<_CMP_LT_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn le(a: __m512, b: __m512) -> __mmask16 {
-            _mm512_cmp_ps_mask::<_CMP_LE_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn ge(a: __m512, b: __m512) -> __mmask16 {
-            _mm512_cmp_ps_mask::<_CMP_GE_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn ne(a: __m512, b: __m512) -> __mmask16 {
-            _mm512_cmp_ps_mask::<_CMP_NEQ_OQ>(a, b)
-        }
-        #[inline(always)]
-        unsafe fn and(a: __mmask16, b: __mmask16) -> __mmask16 {
-            a & b
-        }
-        #[inline(always)]
-        unsafe fn or(a: __mmask16, b: __mmask16) -> __mmask16 {
-            a | b
-        }
-        #[inline(always)]
-        unsafe fn select(m: __mmask16, a: __m512, b: __m512) -> __m512 {
-            _mm512_mask_blend_ps(m, b, a)
-        }
-        #[inline(always)]
-        unsafe fn bits(m: __mmask16) -> u32 {
-            m as u32
-        }
         #[inline(always)]
         unsafe fn load_ids(p: *const u32) -> __m512i {
             _mm512_loadu_si512(p.cast())
@@ -408,7 +232,7 @@ mod x86 {
             _mm512_add_epi32(_mm512_slli_epi32::<3>(i), i)
         }
         #[inline(always)]
-        unsafe fn gather<const K: usize>(base: *const f32, index: __m512i) -> __m512 {
+        unsafe fn vertex<const K: usize>(base: *const f32, index: __m512i) -> __m512 {
             _mm512_i32gather_ps::<4>(index, base.add(K).cast())
         }
         #[inline(always)]
@@ -683,15 +507,15 @@ mod x86 {
             } else {
                 let (base, i) = (sh.base, L::vertex_index(c.idv, sh.last));
                 [
-                    L::gather::<0>(base, i),
-                    L::gather::<1>(base, i),
-                    L::gather::<2>(base, i),
-                    L::gather::<3>(base, i),
-                    L::gather::<4>(base, i),
-                    L::gather::<5>(base, i),
-                    L::gather::<6>(base, i),
-                    L::gather::<7>(base, i),
-                    L::gather::<8>(base, i),
+                    L::vertex::<0>(base, i),
+                    L::vertex::<1>(base, i),
+                    L::vertex::<2>(base, i),
+                    L::vertex::<3>(base, i),
+                    L::vertex::<4>(base, i),
+                    L::vertex::<5>(base, i),
+                    L::vertex::<6>(base, i),
+                    L::vertex::<7>(base, i),
+                    L::vertex::<8>(base, i),
                 ]
             };
             // `intersect_perm` from here on.

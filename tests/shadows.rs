@@ -11,7 +11,7 @@ use common::*;
 use glam::{Vec3, vec3};
 use hyrt::{
     metrics::{DisplayImage, compare},
-    render::{Borders, Frame, Options, Renderer, Shadows, Visibility, shadows::LightStats},
+    render::{Borders, Cache, Frame, Options, Renderer, Shadows, Visibility, shadows::LightStats},
     scene::{Camera, Material, PointLight, Scene, Settings},
 };
 use hyrt_shadowmap::MapKind;
@@ -293,7 +293,12 @@ fn maps_are_cached_and_only_needed_faces_drawn() {
     assert_eq!(b.stats.maps_built, 0);
     assert!(a.film.pixels == b.film.pixels);
     let lights = |f: &Frame| -> Vec<(bool, bool)> {
-        f.stats.decisions.iter().filter(|d| d.what.starts_with("light ")).map(|d| (d.run, d.built)).collect()
+        f.stats
+            .decisions
+            .iter()
+            .filter(|d| d.what.starts_with("light "))
+            .map(|d| (d.run, d.built()))
+            .collect()
     };
     assert_eq!(lights(&a), vec![(true, true); s.lights.len()], "the first frame builds every map");
     assert_eq!(lights(&b), vec![(true, false); s.lights.len()], "the second reuses them");
@@ -390,7 +395,15 @@ fn a_moved_camera_draws_only_the_faces_it_newly_needs() {
         assert!(before.iter().zip(&after).all(|(b, a)| !b || *a), "{kind:?}: a face was dropped");
         assert!(after.iter().zip(&before).any(|(a, b)| *a && !*b), "{kind:?}: the test needs a new face");
         assert_eq!(map.faces_rasterized(), drawn, "{kind:?}: a face was drawn twice");
-        assert!(moved.stats.decisions.iter().any(|d| d.reason.contains("map extended")));
+        assert!(
+            moved
+                .stats
+                .decisions
+                .iter()
+                .any(|d| d.reason.contains("map extended") && d.cache == Cache::Extended),
+            "{kind:?}: {:#?}",
+            moved.stats.decisions
+        );
 
         let mut fresh_scene = s.clone();
         fresh_scene.camera = Some(around);

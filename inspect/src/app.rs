@@ -11,7 +11,7 @@ use eframe::egui::{
 };
 use glam::Vec3 as V3;
 use hyrt::options::{Choice, Indirect, IndirectOptions, Options, Shadows};
-use hyrt::render::FrameDecision;
+use hyrt::render::Cache;
 use hyrt::render::{
     Pass,
     shadows::{RAY_HINT, RAY_TRAVERSAL},
@@ -1598,11 +1598,10 @@ pub fn reran(stats: &hyrt::render::FrameStats) -> String {
     let d = &stats.decisions;
     let lights: Vec<_> = d.iter().filter(|d| d.what.starts_with("light ")).collect();
     let mut parts = Vec::new();
-    let of = |extended: bool| -> Vec<&str> {
-        let faces = |d: &&&FrameDecision| d.reason.starts_with("map extended") == extended;
-        lights.iter().filter(|d| d.built).filter(faces).map(|d| d.what.as_str()).collect()
+    let of = |cache: Cache| -> Vec<&str> {
+        lights.iter().filter(|d| d.cache == cache).map(|d| d.what.as_str()).collect()
     };
-    let (built, extended) = (of(false), of(true));
+    let (built, extended) = (of(Cache::Built), of(Cache::Extended));
     if !lights.is_empty() {
         if built.is_empty() && extended.is_empty() {
             parts.push("light maps reused".to_string());
@@ -1616,7 +1615,7 @@ pub fn reran(stats: &hyrt::render::FrameStats) -> String {
     }
     for (what, name) in [("vpls", "VPLs"), ("vpl_maps", "VPL maps")] {
         if let Some(v) = d.iter().find(|d| d.what == what) {
-            parts.push(format!("{name} {}", if v.built { "rebuilt" } else { "reused" }));
+            parts.push(format!("{name} {}", if v.built() { "rebuilt" } else { "reused" }));
         }
     }
     if parts.is_empty() { "nothing cached to reuse".into() } else { parts.join(", ") }

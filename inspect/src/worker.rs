@@ -464,7 +464,7 @@ impl State<'_> {
         let built_while_moving = if full {
             std::mem::take(&mut self.built_while_moving)
         } else {
-            self.built_while_moving.extend(frame.stats.decisions.iter().filter(|d| d.built).cloned());
+            self.built_while_moving.extend(frame.stats.decisions.iter().filter(|d| d.built()).cloned());
             Vec::new()
         };
         progress.start("making the views", 0);

@@ -14,7 +14,7 @@ use hyrt_shadowmap::vpl_map::VplMap;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
-use crate::render::FrameDecision;
+use crate::render::{Cache, FrameDecision};
 
 use super::gather::{self, Points, ShadePoint, Sums, VplConsts};
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
@@ -123,27 +123,30 @@ impl Renderer<'_> {
             stats.rays += self.vpl_cache.vpls.get().expect("just made").1;
         }
         let cause = self.vpl_cache.cause.map_or(String::new(), |c| format!(" ({c})"));
-        stats.decisions.push(FrameDecision::cached(
-            "vpls",
-            fresh,
-            if let Some(m) = retraced {
-                format!(
-                    "{} VPLs: {m} traced again from the moved light(s), {} reused{cause} in {:.1} ms",
-                    vpls.len(),
-                    vpls.len() - m,
-                    super::ms(t)
-                )
-            } else if fresh {
-                format!(
-                    "{} VPLs generated from {} light path(s){cause} in {:.1} ms",
-                    vpls.len(),
-                    opts.vpl.paths,
-                    super::ms(t)
-                )
-            } else {
-                format!("{} VPLs reused from an earlier frame", vpls.len())
-            },
-        ));
+        stats.decisions.push(
+            FrameDecision::new(
+                "vpls",
+                fresh,
+                if let Some(m) = retraced {
+                    format!(
+                        "{} VPLs: {m} traced again from the moved light(s), {} reused{cause} in {:.1} ms",
+                        vpls.len(),
+                        vpls.len() - m,
+                        super::ms(t)
+                    )
+                } else if fresh {
+                    format!(
+                        "{} VPLs generated from {} light path(s){cause} in {:.1} ms",
+                        vpls.len(),
+                        opts.vpl.paths,
+                        super::ms(t)
+                    )
+                } else {
+                    format!("{} VPLs reused from an earlier frame", vpls.len())
+                },
+            )
+            .with_cache(if fresh { Cache::Built } else { Cache::Reused }),
+        );
         stats.record(super::Pass::VplGen, t);
         let t = Instant::now();
         let mut fresh = false;
@@ -201,7 +204,7 @@ impl Renderer<'_> {
         stats.record(super::Pass::VplMapBuild, t);
         if self.options.indirect == Indirect::Maps {
             let n = self.options.indirect_opts.map.resolution;
-            stats.decisions.push(FrameDecision::cached(
+            stats.decisions.push(FrameDecision::new(
                 "vpl_maps",
                 fresh,
                 if fresh && built < maps.len() {
@@ -219,7 +222,7 @@ impl Renderer<'_> {
                 } else {
                     format!("{} maps reused from an earlier frame", maps.len())
                 },
-            ));
+            ).with_cache(if fresh { Cache::Built } else { Cache::Reused }));
         }
         stats.vpls = vpls.len() as u32;
         stats.vpl_map_bytes = maps.iter().map(|m| m.memory_bytes() as u64).sum();

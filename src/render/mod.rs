@@ -33,7 +33,7 @@ use hyrt_tracer::{Hit, Ray, RayCounts, Tracer};
 use rayon::prelude::*;
 
 pub use crate::plan::Pass;
-pub use decision::{FrameDecision, format_decisions};
+pub use decision::{Cache, FrameDecision, format_decisions};
 pub use surface::SurfaceHit;
 
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
@@ -326,11 +326,17 @@ impl<'a> Renderer<'a> {
         let (w, h) = (self.scene.settings.width, self.scene.settings.height);
         let n = w as usize * h as usize;
 
-        stats.decisions.push(crate::render::FrameDecision::new(
-            "bvh",
-            false,
-            format!("reused: built once for the scene ({:.1} ms), which is unchanged", self.bvh_build_ms()),
-        ));
+        stats.decisions.push(
+            crate::render::FrameDecision::new(
+                "bvh",
+                false,
+                format!(
+                    "reused: built once for the scene ({:.1} ms), which is unchanged",
+                    self.bvh_build_ms()
+                ),
+            )
+            .with_cache(Cache::Reused),
+        );
         let t = Instant::now();
         let gbuffer = visibility::run(self, progress, &mut stats);
         stats.record(Pass::Visibility, t);

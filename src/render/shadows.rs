@@ -42,7 +42,10 @@ use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit};
 
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
-use crate::{render::FrameDecision, scene::PointLight};
+use crate::{
+    render::{Cache, FrameDecision},
+    scene::PointLight,
+};
 
 /// Whether `light` can light `hit` at all (a light with some intensity, strictly in front of
 /// the surface's plane and of its shading normal, not at the point): the condition under which
@@ -392,9 +395,15 @@ impl Renderer<'_> {
                     slot => *slot = Some(Arc::new(map)),
                 }
                 built += 1;
-                decisions.push(FrameDecision::built(what, format!("{reason} in {:.1} ms", super::ms(t))));
+                let done = if have.as_ref().is_some_and(|h| h.iter().any(|&d| d)) {
+                    Cache::Extended
+                } else {
+                    Cache::Built
+                };
+                let reason = format!("{reason} in {:.1} ms", super::ms(t));
+                decisions.push(FrameDecision::new(what, true, reason).with_cache(done));
             } else {
-                decisions.push(FrameDecision::new(what, true, reason));
+                decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
             }
         }
         (cache.iter().map(|m| m.clone().expect("built above")).collect(), built, decisions)

@@ -362,7 +362,7 @@ impl Inspector {
                         .stats
                         .time_ms
                         .iter()
-                        .filter(|(k, _)| Pass::from_name(k).is_some_and(|p| p.part_of().is_none()))
+                        .filter(|(k, _)| top_level(k))
                         .map(|(k, v)| (*k, *v))
                         .collect();
                     let now = Instant::now();
@@ -827,14 +827,7 @@ impl Inspector {
             Color32::GRAY,
         );
         let mut seen: Vec<&str> = recent.iter().flat_map(|s| s.passes.keys().copied()).collect();
-        seen.extend(
-            r.frame
-                .stats
-                .time_ms
-                .keys()
-                .copied()
-                .filter(|k| Pass::from_name(k).is_some_and(|p| p.part_of().is_none())),
-        );
+        seen.extend(r.frame.stats.time_ms.keys().copied().filter(|k| top_level(k)));
         ui.horizontal_wrapped(|ui| {
             for pass in pass_order(seen.into_iter()) {
                 swatch(ui, pass_color(pass), pass);
@@ -1387,8 +1380,8 @@ impl Inspector {
         let mut clicked_at = None;
         let gizmo =
             viewport.and_then(|r| self.gizmo(r, Placed { rect, uv: self.uv(), img, clicked_at: None }));
-        if let Some(r) = viewport {
-            self.navigate(ui, &resp, r, gizmo.as_ref());
+        if viewport.is_some() {
+            self.navigate(ui, &resp, gizmo.as_ref());
         } else if resp.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
@@ -1460,7 +1453,7 @@ impl Inspector {
     /// Camera and light moves from the pointer over the viewport: left drag orbits (or moves
     /// the light along the axis of its handle it started on), shift-left or middle drag pans,
     /// the wheel dollies, the right button looks around (and lets W A S D, Q E fly).
-    fn navigate(&mut self, ui: &egui::Ui, resp: &egui::Response, r: &Rendered, gizmo: Option<&Gizmo>) {
+    fn navigate(&mut self, ui: &egui::Ui, resp: &egui::Response, gizmo: Option<&Gizmo>) {
         let Some(cam) = self.pose.as_ref().map(|p| p.camera) else { return };
         let (secondary, middle, shift, origin) = ui.input(|i| {
             (
@@ -1519,7 +1512,6 @@ impl Inspector {
                 self.set_camera(navigate::dolly(&cam, (-scroll * 0.002).exp(), self.fly_speed * 1e-3));
             }
         }
-        let _ = r;
     }
 
     /// An image fitted into `size` (no zoom); returns where it was drawn.
@@ -1630,6 +1622,11 @@ fn reference_wait(full: bool, auto: bool) -> &'static str {
     }
 }
 
+/// Whether `name` is a pass that is not part of another (the graph stacks these).
+fn top_level(name: &str) -> bool {
+    Pass::from_name(name).is_some_and(|p| p.part_of().is_none())
+}
+
 /// A pass's colour in the frame-time graph: one per top-level pass, in frame order.
 fn pass_color(pass: &str) -> Color32 {
     const COLORS: [Color32; 12] = [
@@ -1646,7 +1643,7 @@ fn pass_color(pass: &str) -> Color32 {
         Color32::from_rgb(160, 120, 220),
         Color32::from_rgb(250, 250, 250),
     ];
-    let top = Pass::ALL.iter().filter(|p| p.part_of().is_none());
+    let top = Pass::ALL.iter().filter(|p| top_level(p.name()));
     let i = top.clone().position(|p| p.name() == pass).unwrap_or(top.count());
     COLORS[i % COLORS.len()]
 }

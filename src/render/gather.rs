@@ -244,31 +244,29 @@ pub(crate) fn add_vpl_on(isa: Isa, c: &VplConsts, map: &VplMap, pts: &Points, su
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
     {
-        let (planes, depths) = (map.planes(), map.depths());
-        // SAFETY: an `Isa` of a tier exists only where the CPU runs it; the kernels' loads stay
-        // within the first `done` points of `pts` and `sums` (asserted there) and their gathers
-        // within the map's texels (indices clamped to the resolution; see each kernel).
         use hyrt_simd::lanes::{Avx2, Avx512, Lanes};
-        let whole = |n: usize| pts.len() / n * n;
-        unsafe {
-            match (isa.tier(), planes, depths) {
-                (Tier::Avx512, Some(g), _) => {
-                    done = whole(Avx512::N);
-                    vector::add_vpl_avx512::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
-                }
-                (Tier::Avx512, _, Some((bits, _))) => {
-                    done = whole(Avx512::N);
-                    vector::add_vpl_avx512::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
-                }
-                (Tier::Avx2, Some(g), _) => {
-                    done = whole(Avx2::N);
-                    vector::add_vpl_avx2::<false>(c, g.as_ptr().cast(), g.len() * 3, pts, done, sums)
-                }
-                (Tier::Avx2, _, Some((bits, _))) => {
-                    done = whole(Avx2::N);
-                    vector::add_vpl_avx2::<true>(c, bits.as_ptr().cast(), bits.len(), pts, done, sums)
-                }
-                _ => {}
+        // The texels: the planes' `f32`, or the half floats of 16-bit depths.
+        let texels = match (map.planes(), map.depths()) {
+            (Some(g), _) => Some((g.as_ptr().cast(), g.len() * 3, false)),
+            (_, Some((bits, _))) => Some((bits.as_ptr().cast::<f32>(), bits.len(), true)),
+            _ => None,
+        };
+        if let Some((texels, len, depth16)) = texels {
+            type Kernel = unsafe fn(&VplConsts, *const f32, usize, &Points, usize, &mut Sums);
+            let kernel: Option<(usize, Kernel)> = match (isa.tier(), depth16) {
+                (Tier::Avx512, false) => Some((Avx512::N, vector::add_vpl_avx512::<false>)),
+                (Tier::Avx512, true) => Some((Avx512::N, vector::add_vpl_avx512::<true>)),
+                (Tier::Avx2, false) => Some((Avx2::N, vector::add_vpl_avx2::<false>)),
+                (Tier::Avx2, true) => Some((Avx2::N, vector::add_vpl_avx2::<true>)),
+                _ => None,
+            };
+            if let Some((n, kernel)) = kernel {
+                done = pts.len() / n * n;
+                // SAFETY: an `Isa` of a tier exists only where the CPU runs it; the kernels'
+                // loads stay within the first `done` points of `pts` and `sums` (asserted there)
+                // and their gathers within the map's texels (indices clamped to the resolution;
+                // see each kernel).
+                unsafe { kernel(c, texels, len, pts, done, sums) }
             }
         }
     }

@@ -390,7 +390,7 @@ mod tests {
     use crate::test_rng::Rng;
 
     /// Triangles of every size class the kernels treat differently: sub-pixel, a few pixels, 8x8
-    /// blocks, tile-filling, guard-band sized (edge values beyond 2^51), crossing the near plane,
+    /// blocks, tile-filling, guard-band sized (thousands of screens across), crossing the near plane,
     /// plus exact duplicates and coplanar overlaps with other ids (depth ties), and copies moved
     /// by ~1e-6 relative in depth (ties within a window only).
     fn scene() -> (Vec<[Vec4; 3]>, Vec<u32>) {
@@ -460,6 +460,46 @@ mod tests {
             t.id.clone(),
             t.bary.iter().map(|b| b.map(f32::to_bits)).collect(),
         )
+    }
+
+    /// Two triangles far larger than the screen, intersecting along `x = 0`, behind and in front
+    /// of small ones: every kernel gives the scalar kernel's buffers bit for bit. Their edge
+    /// values exceed `2^51` at every pixel, where the AVX2 kernels must take their exact
+    /// `i64 -> f64` conversion, in the depth test and in the resolve.
+    #[test]
+    fn screen_filling_guard_band_triangles_give_identical_buffers() {
+        // Vertices 4000 NDC units out (406k pixels across the 203-pixel width, inside the
+        // guard band: not clipped). Every pixel lies more than 1700 units (over 1.3e5 pixels)
+        // from each edge, of length over 8000 units (6.2e5 pixels): the edge function, the
+        // product of the two in 1/256 pixel units, exceeds `1.3e5 * 6.2e5 * 2^16 > 2^52`.
+        let big = |z: [f32; 3]| {
+            let p = |x: f32, y: f32, z: f32| Vec4::new(x, y, z, 1.0);
+            [p(-4000.0, -4000.0, z[0]), p(4000.0, -4000.0, z[1]), p(0.0, 4000.0, z[2])]
+        };
+        let (small, small_ids) = scene();
+        let mut tris = vec![big([0.2, 0.8, 0.5]), big([0.8, 0.2, 0.5])];
+        tris.extend(small.iter().step_by(5).take(300));
+        let mut ids: Vec<u32> = vec![1_000_001, 1_000_002];
+        ids.extend(small_ids.iter().step_by(5).take(300));
+        for reversed in [false, true] {
+            for tie in [0.0, 1.0 / 65536.0] {
+                for tile in [8, 64] {
+                    let reference = render_with(Isa::SCALAR, &tris, &ids, reversed, tie, tile);
+                    // Not vacuous: both large triangles win pixels.
+                    for big_id in [1_000_001, 1_000_002] {
+                        assert!(reference.id.iter().filter(|&&id| id == big_id).count() > 1000);
+                    }
+                    let reference = bits(&reference);
+                    for isa in Isa::for_tests("z-buffer kernels") {
+                        let t = render_with(isa, &tris, &ids, reversed, tie, tile);
+                        assert!(
+                            bits(&t) == reference,
+                            "{isa:?}, reversed {reversed}, tie {tie}, tile {tile}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     /// Every kernel gives the scalar kernel's buffers bit for bit, in both depth conventions,

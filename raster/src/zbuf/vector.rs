@@ -27,10 +27,13 @@
 //!   covered: no per-pixel coverage tests), in 8x8 blocks with whole-block rejection and
 //!   acceptance, their edge values stepped from block to block.
 //!
-//! It is generic over the [`Lanes`] of a backend, whose methods are inlined into the
-//! `#[target_feature]` entry points ([`draw_all_avx2`], [`draw_all_avx512`]).
+//! It is written once, generic over the [`Lanes`] of a tier (AVX2, or AVX-512 with its 8-lane
+//! `f64` vectors and mask registers), whose methods are inlined into the `#[target_feature]`
+//! entry points ([`draw_all_avx2`], [`draw_all_avx512`]).
 
 use std::arch::x86_64::*;
+
+use hyrt_simd::lanes::{Avx2, Avx512x8, Lanes as Base};
 
 use crate::EMPTY_ID;
 use crate::edge::{BLOCK, EdgeFns, low_bits};
@@ -44,49 +47,506 @@ fn each<T>(mut f: impl FnMut(usize) -> T) -> [T; 3] {
     [f(0), f(1), f(2)]
 }
 
-/// The row primitives of a vector backend, with the per-triangle constants they need.
+/// What the depth test needs of a tier beyond its [`Base`] operations on 8 lanes of `f32`: 8
+/// lanes of `i64` (edge values along a row) and of `f64` (the depth before its rounding to
+/// `f32`), which AVX2 holds in two vectors of 4 and AVX-512 in one, and masked stores.
 ///
-/// A backend value is only created inside its `#[target_feature]` entry point, i.e. after the CPU
-/// was found to support it: that is the safety argument of the `unsafe` blocks in the
-/// implementations (calls to intrinsics of features the enclosing function does not declare).
-trait Lanes<'t> {
-    /// 8 consecutive values of one edge function along a row.
-    type Row: Copy;
-    /// The per-triangle constants of the depth test alone (what [`Lanes::test_quad`] needs).
-    type Depth;
+/// # Safety
+/// As [`Base`]'s: every method may be called only where the CPU runs the tier, here from the
+/// tier's `#[target_feature]` entry point ([`draw_all_avx2`], [`draw_all_avx512`]), into which
+/// the methods are inlined. That is the safety argument of the `unsafe` blocks of the generic
+/// kernel, which only its entry points call.
+#[allow(clippy::missing_safety_doc)] // One contract for all, stated above.
+trait Lanes: Base<F = __m256, I = __m256i> {
+    /// 8 `i64`.
+    type L: Copy;
+    /// 8 `f64`.
+    type D: Copy;
 
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self;
+    unsafe fn splat_i64(x: i64) -> Self::L;
+    /// `[0, s, 2 s, .., 7 s]`.
+    unsafe fn ramp_i64(s: i64) -> Self::L;
+    unsafe fn add_i64(a: Self::L, b: Self::L) -> Self::L;
+    /// Bit `j` set iff lane `j` of each of `r` is `>= 0`.
+    unsafe fn inside(r: &[Self::L; 3]) -> u32;
+    /// `n as f64` per lane, for edge values of covered samples (`n >= 0`). Unless `wide`, no
+    /// lane that matters reaches `2^51` (see [`Triangle::wide`]).
+    unsafe fn i64_to_f64(n: Self::L, wide: bool) -> Self::D;
+    /// `n as f64` per lane (exact).
+    unsafe fn i32_to_f64(n: __m256i) -> Self::D;
+    unsafe fn splat_f64(x: f64) -> Self::D;
+    unsafe fn add_f64(a: Self::D, b: Self::D) -> Self::D;
+    unsafe fn mul_f64(a: Self::D, b: Self::D) -> Self::D;
+    /// `d as f32` per lane.
+    unsafe fn to_f32(d: Self::D) -> __m256;
+    /// Lane `j` set iff bit `j` of `bits` is.
+    unsafe fn mask(bits: u32) -> Self::M;
+    /// `a` where `m`, `b` elsewhere.
+    unsafe fn select_i(m: Self::M, a: __m256i, b: __m256i) -> __m256i;
+    /// Writes the lanes `m` of `new` to `p`, which holds `old`.
+    unsafe fn store_where(p: &mut [f32; 8], m: Self::M, new: __m256, old: __m256);
+    /// Writes the lanes `m` of `new` to `p`.
+    unsafe fn store_i_where(p: &mut [u32; 8], m: Self::M, new: __m256i);
+    /// `a == b` per lane.
+    unsafe fn eq_i(a: __m256i, b: __m256i) -> Self::M;
+    /// `d.x (p.y - a.y) - d.y (p.x - a.x)` from [`edge_terms`]: [`EdgeFns::at_pixel`], exact
+    /// (each product of two `i32` is exact in `i64`, and the edge function is below `2^60`).
+    unsafe fn edge(t: [__m256i; 4]) -> Self::L;
+    /// Whether [`Lanes::i64_to_f64`] must be told `wide` for the edge values `e` of the `live`
+    /// lanes (`>= 0`: covered samples): some reaches `2^51`.
+    unsafe fn needs_wide(e: &[Self::L; 3], live: Self::M) -> bool;
+    /// `p as f64` per lane.
+    unsafe fn f32_to_f64(p: __m256) -> Self::D;
+    /// `(num / den) as f32` in the `live` lanes where `!(den <= 0)` (those [`SetupTri::bary`]
+    /// divides in), `+0` elsewhere.
+    unsafe fn quotient(num: Self::D, den: Self::D, live: Self::M) -> __m256;
+    /// The first `id.len() <= 8` lanes of `v` to `id`.
+    unsafe fn store_ids(id: &mut [u32], v: __m256i);
+    /// The pairs `[b1[j], b2[j]]` of the first `bary.len() <= 8` lanes to `bary`.
+    unsafe fn store_pairs(bary: &mut [[f32; 2]], b1: __m256, b2: __m256);
+}
+
+// Each method is one intrinsic or a few; the trait's contract (the tier) is what makes them
+// sound, so per-call `unsafe` blocks would add nothing.
+#[allow(unsafe_op_in_unsafe_fn)]
+impl Lanes for Avx2 {
+    type L = [__m256i; 2];
+    type D = [__m256d; 2];
+
+    #[inline(always)]
+    unsafe fn splat_i64(x: i64) -> Self::L {
+        [_mm256_set1_epi64x(x); 2]
+    }
+    #[inline(always)]
+    unsafe fn ramp_i64(s: i64) -> Self::L {
+        [_mm256_setr_epi64x(0, s, 2 * s, 3 * s), _mm256_setr_epi64x(4 * s, 5 * s, 6 * s, 7 * s)]
+    }
+    #[inline(always)]
+    unsafe fn add_i64(a: Self::L, b: Self::L) -> Self::L {
+        [_mm256_add_epi64(a[0], b[0]), _mm256_add_epi64(a[1], b[1])]
+    }
+    #[inline(always)]
+    unsafe fn inside(r: &[Self::L; 3]) -> u32 {
+        let lo = _mm256_or_si256(_mm256_or_si256(r[0][0], r[1][0]), r[2][0]);
+        let hi = _mm256_or_si256(_mm256_or_si256(r[0][1], r[1][1]), r[2][1]);
+        // Sign bits of the ORs: set iff some edge value of the lane is negative.
+        let outside =
+            _mm256_movemask_pd(_mm256_castsi256_pd(lo)) | _mm256_movemask_pd(_mm256_castsi256_pd(hi)) << 4;
+        !(outside as u32) & 0xff
+    }
+    #[inline(always)]
+    unsafe fn i64_to_f64(n: Self::L, wide: bool) -> Self::D {
+        if wide {
+            [to_f64_exact_avx2(n[0]), to_f64_exact_avx2(n[1])]
+        } else {
+            [to_f64_avx2(n[0]), to_f64_avx2(n[1])]
+        }
+    }
+    #[inline(always)]
+    unsafe fn i32_to_f64(n: __m256i) -> Self::D {
+        [_mm256_cvtepi32_pd(_mm256_castsi256_si128(n)), _mm256_cvtepi32_pd(_mm256_extracti128_si256::<1>(n))]
+    }
+    #[inline(always)]
+    unsafe fn splat_f64(x: f64) -> Self::D {
+        [_mm256_set1_pd(x); 2]
+    }
+    #[inline(always)]
+    unsafe fn add_f64(a: Self::D, b: Self::D) -> Self::D {
+        [_mm256_add_pd(a[0], b[0]), _mm256_add_pd(a[1], b[1])]
+    }
+    #[inline(always)]
+    unsafe fn mul_f64(a: Self::D, b: Self::D) -> Self::D {
+        [_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])]
+    }
+    #[inline(always)]
+    unsafe fn to_f32(d: Self::D) -> __m256 {
+        _mm256_set_m128(_mm256_cvtpd_ps(d[1]), _mm256_cvtpd_ps(d[0]))
+    }
+    #[inline(always)]
+    unsafe fn mask(bits: u32) -> __m256 {
+        _mm256_castsi256_ps(lanes_avx2(bits))
+    }
+    #[inline(always)]
+    unsafe fn select_i(m: __m256, a: __m256i, b: __m256i) -> __m256i {
+        _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b), _mm256_castsi256_ps(a), m))
+    }
+    #[inline(always)]
+    unsafe fn store_where(p: &mut [f32; 8], m: __m256, new: __m256, old: __m256) {
+        _mm256_storeu_ps(p.as_mut_ptr(), _mm256_blendv_ps(old, new, m));
+    }
+    #[inline(always)]
+    unsafe fn store_i_where(p: &mut [u32; 8], m: __m256, new: __m256i) {
+        let old = _mm256_loadu_si256(p.as_ptr().cast());
+        _mm256_storeu_si256(p.as_mut_ptr().cast(), Self::select_i(m, new, old));
+    }
+    #[inline(always)]
+    unsafe fn eq_i(a: __m256i, b: __m256i) -> __m256 {
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(a, b))
+    }
+    #[inline(always)]
+    unsafe fn edge(t: [__m256i; 4]) -> Self::L {
+        [edge_half::<0>(t), edge_half::<1>(t)]
+    }
+    #[inline(always)]
+    unsafe fn needs_wide(e: &[Self::L; 3], live: __m256) -> bool {
+        // `to_f64_avx2` is exact iff no bit from 51 on is set (the values are `>= 0`).
+        let live = [half_epi64::<0>(_mm256_castps_si256(live)), half_epi64::<1>(_mm256_castps_si256(live))];
+        let lo = _mm256_and_si256(_mm256_or_si256(_mm256_or_si256(e[0][0], e[1][0]), e[2][0]), live[0]);
+        let hi = _mm256_and_si256(_mm256_or_si256(_mm256_or_si256(e[0][1], e[1][1]), e[2][1]), live[1]);
+        _mm256_testz_si256(_mm256_or_si256(lo, hi), _mm256_set1_epi64x(!((1 << 51) - 1))) == 0
+    }
+    #[inline(always)]
+    unsafe fn f32_to_f64(p: __m256) -> Self::D {
+        [_mm256_cvtps_pd(_mm256_castps256_ps128(p)), _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(p))]
+    }
+    #[inline(always)]
+    unsafe fn quotient(num: Self::D, den: Self::D, live: __m256) -> __m256 {
+        let live = _mm256_castps_si256(live);
+        let lo = quotient_half(num[0], den[0], half_epi64::<0>(live));
+        let hi = quotient_half(num[1], den[1], half_epi64::<1>(live));
+        Self::to_f32([lo, hi])
+    }
+    #[inline(always)]
+    unsafe fn store_ids(id: &mut [u32], v: __m256i) {
+        let mut all = [0u32; 8];
+        _mm256_storeu_si256(all.as_mut_ptr().cast(), v);
+        id.copy_from_slice(&all[..id.len()]);
+    }
+    #[inline(always)]
+    unsafe fn store_pairs(bary: &mut [[f32; 2]], b1: __m256, b2: __m256) {
+        // Within each 128-bit half: pairs 0, 1 (and 4, 5) in `lo`, 2, 3 (and 6, 7) in `hi`.
+        let (lo, hi) = (_mm256_unpacklo_ps(b1, b2), _mm256_unpackhi_ps(b1, b2));
+        let mut pairs = [[0.0f32; 2]; 8];
+        _mm256_storeu_ps(pairs.as_mut_ptr().cast(), _mm256_permute2f128_ps::<0x20>(lo, hi));
+        _mm256_storeu_ps(pairs[4..].as_mut_ptr().cast(), _mm256_permute2f128_ps::<0x31>(lo, hi));
+        bary.copy_from_slice(&pairs[..bary.len()]);
+    }
+}
+
+/// Lanes 0-3 (`H = 0`) or 4-7 (`H = 1`) of 8 `i32`, sign-extended to `i64`.
+#[inline(always)]
+fn half_epi64<const H: i32>(r: __m256i) -> __m256i {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe { _mm256_cvtepi32_epi64(_mm256_extracti128_si256::<H>(r)) }
+}
+
+/// [`Lanes::edge`] for lanes `4 H..4 H + 4`.
+#[inline(always)]
+fn edge_half<const H: i32>(t: [__m256i; 4]) -> __m256i {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe {
+        let [dx, dy, ry, rx] =
+            [half_epi64::<H>(t[0]), half_epi64::<H>(t[1]), half_epi64::<H>(t[2]), half_epi64::<H>(t[3])];
+        _mm256_sub_epi64(_mm256_mul_epi32(dx, ry), _mm256_mul_epi32(dy, rx))
+    }
+}
+
+/// [`Lanes::quotient`] on 4 lanes, `live` a mask of `i64` lanes.
+#[inline(always)]
+fn quotient_half(num: __m256d, den: __m256d, live: __m256i) -> __m256d {
+    // SAFETY: only called from AVX2 code (see `Lanes`).
+    unsafe {
+        let ok =
+            _mm256_and_pd(_mm256_cmp_pd::<_CMP_NLE_UQ>(den, _mm256_setzero_pd()), _mm256_castsi256_pd(live));
+        _mm256_and_pd(_mm256_div_pd(num, den), ok)
+    }
+}
+
+/// On AVX-512, the `i64 -> f64` conversion is a single instruction rounding like `as f64`, so
+/// every triangle can take it.
+#[allow(unsafe_op_in_unsafe_fn)]
+impl Lanes for Avx512x8 {
+    type L = __m512i;
+    type D = __m512d;
+
+    #[inline(always)]
+    unsafe fn splat_i64(x: i64) -> __m512i {
+        _mm512_set1_epi64(x)
+    }
+    #[inline(always)]
+    unsafe fn ramp_i64(s: i64) -> __m512i {
+        // Exact: |7 s| < 2^40 (module docs of `setup`).
+        _mm512_mullo_epi64(_mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7), _mm512_set1_epi64(s))
+    }
+    #[inline(always)]
+    unsafe fn add_i64(a: __m512i, b: __m512i) -> __m512i {
+        _mm512_add_epi64(a, b)
+    }
+    #[inline(always)]
+    unsafe fn inside(r: &[__m512i; 3]) -> u32 {
+        // 0xfe: a | b | c. Its sign bit is set iff some edge value is negative.
+        let any = _mm512_ternarylogic_epi64::<0xfe>(r[0], r[1], r[2]);
+        u32::from(!_mm512_movepi64_mask(any))
+    }
+    #[inline(always)]
+    unsafe fn i64_to_f64(n: __m512i, _wide: bool) -> __m512d {
+        _mm512_cvtepi64_pd(n)
+    }
+    #[inline(always)]
+    unsafe fn i32_to_f64(n: __m256i) -> __m512d {
+        _mm512_cvtepi32_pd(n)
+    }
+    #[inline(always)]
+    unsafe fn splat_f64(x: f64) -> __m512d {
+        _mm512_set1_pd(x)
+    }
+    #[inline(always)]
+    unsafe fn add_f64(a: __m512d, b: __m512d) -> __m512d {
+        _mm512_add_pd(a, b)
+    }
+    #[inline(always)]
+    unsafe fn mul_f64(a: __m512d, b: __m512d) -> __m512d {
+        _mm512_mul_pd(a, b)
+    }
+    #[inline(always)]
+    unsafe fn to_f32(d: __m512d) -> __m256 {
+        _mm512_cvtpd_ps(d)
+    }
+    #[inline(always)]
+    unsafe fn mask(bits: u32) -> __mmask8 {
+        bits as __mmask8
+    }
+    #[inline(always)]
+    unsafe fn select_i(m: __mmask8, a: __m256i, b: __m256i) -> __m256i {
+        _mm256_mask_blend_epi32(m, b, a)
+    }
+    #[inline(always)]
+    unsafe fn store_where(p: &mut [f32; 8], m: __mmask8, new: __m256, _old: __m256) {
+        _mm256_mask_storeu_ps(p.as_mut_ptr(), m, new);
+    }
+    #[inline(always)]
+    unsafe fn store_i_where(p: &mut [u32; 8], m: __mmask8, new: __m256i) {
+        _mm256_mask_storeu_epi32(p.as_mut_ptr().cast(), m, new);
+    }
+    #[inline(always)]
+    unsafe fn eq_i(a: __m256i, b: __m256i) -> __mmask8 {
+        _mm256_cmpeq_epi32_mask(a, b)
+    }
+    #[inline(always)]
+    unsafe fn edge(t: [__m256i; 4]) -> __m512i {
+        let wide = |r| _mm512_cvtepi32_epi64(r);
+        let [dx, dy, ry, rx] = [wide(t[0]), wide(t[1]), wide(t[2]), wide(t[3])];
+        _mm512_sub_epi64(_mm512_mul_epi32(dx, ry), _mm512_mul_epi32(dy, rx))
+    }
+    #[inline(always)]
+    unsafe fn needs_wide(_e: &[__m512i; 3], _live: __mmask8) -> bool {
+        false
+    }
+    #[inline(always)]
+    unsafe fn f32_to_f64(p: __m256) -> __m512d {
+        _mm512_cvtps_pd(p)
+    }
+    #[inline(always)]
+    unsafe fn quotient(num: __m512d, den: __m512d, live: __mmask8) -> __m256 {
+        let ok = _mm512_mask_cmp_pd_mask::<_CMP_NLE_UQ>(live, den, _mm512_setzero_pd());
+        _mm512_cvtpd_ps(_mm512_maskz_div_pd(ok, num, den))
+    }
+    #[inline(always)]
+    unsafe fn store_ids(id: &mut [u32], v: __m256i) {
+        _mm256_mask_storeu_epi32(id.as_mut_ptr().cast(), low_bits(id.len() as u32) as u8, v);
+    }
+    #[inline(always)]
+    unsafe fn store_pairs(bary: &mut [[f32; 2]], b1: __m256, b2: __m256) {
+        let pairs = _mm512_permutex2var_ps(
+            _mm512_castps256_ps512(b1),
+            _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23),
+            _mm512_castps256_ps512(b2),
+        );
+        _mm512_mask_storeu_ps(bary.as_mut_ptr().cast(), low_bits(2 * bary.len() as u32) as u16, pairs);
+    }
+}
+
+/// The per-triangle constants of the depth test, in every lane.
+struct Depth<'t, T: Lanes> {
+    tri: &'t SetupTri,
+    idx: __m256i,
+    z0: T::D,
+    dz: [T::D; 2],
+    /// The clamp range and the tie window.
+    lo: __m256,
+    hi: __m256,
+    tie: __m256,
+}
+
+impl<'t, T: Lanes> Depth<'t, T> {
+    #[inline(always)]
+    fn new(tri: &'t SetupTri, idx: u32, tie: f32) -> Self {
+        let (dz, [lo, hi]) = (tri.dz(), tri.range());
+        // SAFETY: see `Lanes`.
+        unsafe {
+            Self {
+                tri,
+                idx: _mm256_set1_epi32(idx as i32),
+                z0: T::splat_f64(tri.z0()),
+                dz: [T::splat_f64(dz[0]), T::splat_f64(dz[1])],
+                lo: _mm256_set1_ps(lo),
+                hi: _mm256_set1_ps(hi),
+                tie: _mm256_set1_ps(tie),
+            }
+        }
+    }
+
+    /// Depth of 8 pixels from their unbiased `e1`, `e2` (as `f64`): `(z0 + e1 dz0) + e2 dz1` as
+    /// [`SetupTri::depth`], rounded to `f32` and clamped. Lanes of uncovered pixels may hold
+    /// garbage; they are masked out by the caller.
+    #[inline(always)]
+    fn depth(&self, e1: T::D, e2: T::D) -> __m256 {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            let d = T::add_f64(T::add_f64(self.z0, T::mul_f64(e1, self.dz[0])), T::mul_f64(e2, self.dz[1]));
+            clamp::<T>(T::to_f32(d), self.lo, self.hi)
+        }
+    }
+
+    /// The `covered` lanes where the fragment, of depths `d`, replaces the z-buffer entries
+    /// `cur` (lane `j`: the pixel at tile index `index(j)`).
+    #[inline(always)]
+    fn update<const REVERSED: bool, const TIE: bool>(
+        &self,
+        zb: &ZBuffer,
+        d: __m256,
+        cur: __m256,
+        covered: T::M,
+        index: impl Fn(usize) -> usize,
+    ) -> T::M {
+        // SAFETY: see `Lanes`; the store writes an array.
+        unsafe {
+            let closer = T::and(if REVERSED { T::gt(d, cur) } else { T::lt(d, cur) }, covered);
+            // Lanes decided by the id: equal depths, or with `TIE` depths in the window (which
+            // the depth comparison then must not decide).
+            let tied = if TIE { tie_window::<T, REVERSED>(d, cur, self.tie) } else { T::eq(d, cur) };
+            let ties = T::and(tied, covered);
+            let mut update = if TIE { T::and_not(closer, ties) } else { closer };
+            let ties = T::bits(ties);
+            if ties != 0 {
+                let mut d_arr = [0.0f32; 8];
+                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
+                let won = tie_winners::<REVERSED, TIE>(zb, index, self.tri, &d_arr, ties);
+                update = T::or(update, T::mask(won));
+            }
+            update
+        }
+    }
+}
+
+/// Depth-tests the 4 x 2 pixels of `zb` at tile indices `k..k + 4` (lanes 0-3) and
+/// `k + w..k + w + 4` (lanes 4-7, `w` the tile width) whose bits are set in `covered`, given
+/// their unbiased `e1`, `e2` as 8 lanes of `i32`.
+#[inline(always)]
+fn test_quad<'t, T: Lanes, const REVERSED: bool, const TIE: bool>(
+    c: &Depth<'t, T>,
+    zb: &mut ZBuffer<'t>,
+    k: usize,
+    covered: u32,
+    e1: __m256i,
+    e2: __m256i,
+) {
+    let w = zb.w;
+    // SAFETY: see `Lanes`; the loads and stores access the 4 elements of `quad_of` slices.
+    unsafe {
+        let d = c.depth(T::i32_to_f64(e1), T::i32_to_f64(e2));
+        let load = |buf: &mut [f32], k: usize| _mm_loadu_ps(quad_of(buf, k).as_ptr());
+        let cur = _mm256_set_m128(load(&mut zb.depth, k + w), load(&mut zb.depth, k));
+        let update = c.update::<REVERSED, TIE>(zb, d, cur, T::mask(covered), |j| quad_index(k, w, j));
+        // Blended and stored whole rather than with masked stores: the next small triangle
+        // often reads these entries again, and a masked store cannot forward its data to a
+        // load (measured with AVX-512: 6 % less time on small triangles).
+        let new = T::select(update, d, cur);
+        _mm_storeu_ps(quad_of(&mut zb.depth, k).as_mut_ptr(), _mm256_castps256_ps128(new));
+        _mm_storeu_ps(quad_of(&mut zb.depth, k + w).as_mut_ptr(), _mm256_extractf128_ps::<1>(new));
+        let load = |buf: &mut [u32], k: usize| _mm_loadu_si128(quad_of(buf, k).as_ptr().cast());
+        let old = _mm256_set_m128i(load(&mut zb.win, k + w), load(&mut zb.win, k));
+        let new = T::select_i(update, c.idx, old);
+        _mm_storeu_si128(quad_of(&mut zb.win, k).as_mut_ptr().cast(), _mm256_castsi256_si128(new));
+        _mm_storeu_si128(quad_of(&mut zb.win, k + w).as_mut_ptr().cast(), _mm256_extracti128_si256::<1>(new));
+    }
+}
+
+/// The constants of a triangle for rows of 8 pixels with `i64` edge functions ([`draw`]).
+struct Triangle<'t, T: Lanes> {
+    depth: Depth<'t, T>,
+    /// `[0, s, .., 7 s]` for each edge's x step `s`.
+    off: [T::L; 3],
+    /// Each edge's y step and fill-rule bias, in every lane.
+    sy: [T::L; 3],
+    bias: [T::L; 3],
+    /// Whether edge values may reach `2^51`, which AVX2 converts to `f64` with
+    /// [`to_f64_exact_avx2`]: covered samples have `0 <= e_i <= area` ([`EdgeFns::area`]), so
+    /// only triangles with `area >= 2^51` (hundreds of thousands of pixels across: guard-band
+    /// triangles) do; [`to_f64_avx2`] is exact for the others.
+    wide: bool,
+}
+
+impl<'t, T: Lanes> Triangle<'t, T> {
+    #[inline(always)]
+    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
+        // SAFETY: see `Lanes`.
+        unsafe {
+            Self {
+                depth: Depth::new(tri, idx, tie),
+                off: each(|i| T::ramp_i64(ef.sx[i])),
+                sy: each(|i| T::splat_i64(ef.sy[i])),
+                bias: each(|i| T::splat_i64(ef.bias[i])),
+                wide: ef.area >= 1 << 51,
+            }
+        }
+    }
+
     /// `e + j sx_i` for `j = 0..8`: edge `i` along a row, from its value `e` at the first pixel.
-    fn row(&self, i: usize, e: i64) -> Self::Row;
+    #[inline(always)]
+    fn row(&self, i: usize, e: i64) -> T::L {
+        // SAFETY: see `Lanes`.
+        unsafe { T::add_i64(T::splat_i64(e), self.off[i]) }
+    }
+
     /// The row below: `+ sy_i`.
-    fn down(&self, i: usize, r: Self::Row) -> Self::Row;
+    #[inline(always)]
+    fn down(&self, i: usize, r: T::L) -> T::L {
+        // SAFETY: see `Lanes`.
+        unsafe { T::add_i64(r, self.sy[i]) }
+    }
+
     /// `+ bias_i`: biased edge values to unbiased ones.
-    fn unbias(&self, i: usize, r: Self::Row) -> Self::Row;
+    #[inline(always)]
+    fn unbias(&self, i: usize, r: T::L) -> T::L {
+        // SAFETY: see `Lanes`.
+        unsafe { T::add_i64(r, self.bias[i]) }
+    }
+
     /// Bit `j` set iff lane `j` of the three biased rows is inside (all `>= 0`).
-    fn inside(&self, r: &[Self::Row; 3]) -> u32;
+    #[inline(always)]
+    fn inside(&self, r: &[T::L; 3]) -> u32 {
+        // SAFETY: see `Lanes`.
+        unsafe { T::inside(r) }
+    }
+
     /// Depth-tests the 8 pixels of `zb` from index `k` on whose bits are set in `covered`, given
     /// their unbiased `e1`, `e2`.
+    #[inline(always)]
     fn test_row<const REVERSED: bool, const TIE: bool>(
         &self,
         zb: &mut ZBuffer<'t>,
         k: usize,
         covered: u32,
-        e1: Self::Row,
-        e2: Self::Row,
-    );
-
-    fn depth(tri: &'t SetupTri, idx: u32, tie: f32) -> Self::Depth;
-    /// Depth-tests the 4 x 2 pixels of `zb` at tile indices `k..k + 4` (lanes 0-3) and
-    /// `k + w..k + w + 4` (lanes 4-7, `w` the tile width) whose bits are set in `covered`, given
-    /// their unbiased `e1`, `e2` as 8 lanes of `i32`.
-    fn test_quad<const REVERSED: bool, const TIE: bool>(
-        c: &Self::Depth,
-        zb: &mut ZBuffer<'t>,
-        k: usize,
-        covered: u32,
-        e1: __m256i,
-        e2: __m256i,
-    );
+        e1: T::L,
+        e2: T::L,
+    ) {
+        let c = &self.depth;
+        // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
+        unsafe {
+            // One branch, and each conversion compiled for its case.
+            let (e1, e2) = if self.wide {
+                (T::i64_to_f64(e1, true), T::i64_to_f64(e2, true))
+            } else {
+                (T::i64_to_f64(e1, false), T::i64_to_f64(e2, false))
+            };
+            let d = c.depth(e1, e2);
+            let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
+            let update = c.update::<REVERSED, TIE>(zb, d, cur, T::mask(covered), |j| k + j);
+            T::store_where(row_of(&mut zb.depth, k), update, d, cur);
+            T::store_i_where(row_of(&mut zb.win, k), update, c.idx);
+        }
+    }
 }
 
 /// 8 entries of a tile buffer from `k` on. Bounds-checked: the buffers have `PAD` spare entries
@@ -123,7 +583,7 @@ fn tie_winners<const REVERSED: bool, const TIE: bool>(
 
 /// Depth-tests every triangle of the tile.
 #[inline(always)]
-fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer<'t>) {
+fn draw_all<'t, T: Lanes, const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer<'t>) {
     for idx in 0..zb.tris.len() as u32 {
         if let Some(&next) = zb.tris.get(idx as usize + 6) {
             // Triangles are read from memory written by setup long before: prefetching the (up
@@ -140,10 +600,10 @@ fn draw_all<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(zb: &mut ZB
         let tri = zb.tris[idx as usize];
         let rect = clip_to_tile(zb.rect, tri.bbox);
         if let Some(edges) = QuadEdges::new(tri, rect) {
-            draw_quads::<L, REVERSED, TIE>(zb, idx, rect, &edges);
+            draw_quads::<T, REVERSED, TIE>(zb, idx, rect, &edges);
             continue;
         }
-        draw::<L, REVERSED, TIE>(zb, idx, &EdgeFns::new(tri));
+        draw::<T, REVERSED, TIE>(zb, idx, &EdgeFns::new(tri));
     }
 }
 
@@ -329,15 +789,15 @@ impl QuadEdges {
 /// quads from the first to the last pixel that the pair's span may reach ([`QuadEdges::spans`])
 /// are tested.
 #[inline(always)]
-fn draw_quads<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
+fn draw_quads<'t, T: Lanes, const REVERSED: bool, const TIE: bool>(
     zb: &mut ZBuffer<'t>,
     idx: u32,
     [x0, y0, x1, y1]: [u32; 4],
     edges: &QuadEdges,
 ) {
     let tri = zb.tris[idx as usize];
-    // Only created inside the `#[target_feature]` entry points (see `Lanes`), both with AVX2.
-    let c = L::depth(tri, idx, zb.tie);
+    // Only run inside the `#[target_feature]` entry points (see `Lanes`), both with AVX2.
+    let c = Depth::<T>::new(tri, idx, zb.tie);
     let w = zb.w;
     let (width, height) = (x1 - x0, y1 - y0);
     let k0 = (y0 - zb.rect[1]) as usize * w + (x0 - zb.rect[0]) as usize;
@@ -356,7 +816,7 @@ fn draw_quads<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
             let mask = !(_mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32) & rows & columns;
             if mask != 0 {
                 let (e1, e2) = (_mm256_add_epi32(e[1], bias[0]), _mm256_add_epi32(e[2], bias[1]));
-                L::test_quad::<REVERSED, TIE>(&c, zb, k0, mask, e1, e2);
+                test_quad::<T, REVERSED, TIE>(&c, zb, k0, mask, e1, e2);
             }
             return;
         }
@@ -388,7 +848,7 @@ fn draw_quads<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
                     // conference room's pass, cold; its chairs are slivers).
                     let (e1, e2) = (_mm256_add_epi32(ev[1], bias[0]), _mm256_add_epi32(ev[2], bias[1]));
                     let k = k0 + y as usize * w + d as usize;
-                    L::test_quad::<REVERSED, TIE>(&c, zb, k, mask, e1, e2);
+                    test_quad::<T, REVERSED, TIE>(&c, zb, k, mask, e1, e2);
                     for i in 0..3 {
                         ev[i] = _mm256_add_epi32(ev[i], right[i]);
                     }
@@ -403,38 +863,29 @@ fn draw_quads<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
     }
 }
 
-/// Depth-tests `rows` rows of `n <= 8` pixels, all covered, from tile index `k` and unbiased
-/// edge values `e` at its first pixel.
+/// Depth-tests `rows` rows of `n <= 8` pixels from tile index `k`, from the edge values `e` at
+/// their first pixel: with `COVERED`, every pixel is covered and `e` is unbiased; otherwise `e`
+/// is biased, and coverage is tested per pixel.
 #[inline(always)]
-fn test_covered<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
+fn test_block<'t, T: Lanes, const REVERSED: bool, const TIE: bool, const COVERED: bool>(
     zb: &mut ZBuffer<'t>,
-    c: &L,
+    c: &Triangle<'t, T>,
     mut k: usize,
     n: u32,
     rows: u32,
     e: [i64; 3],
 ) {
-    let covered = low_bits(n);
-    let (mut e1, mut e2) = (c.row(1, e[1]), c.row(2, e[2]));
-    for _ in 0..rows {
-        c.test_row::<REVERSED, TIE>(zb, k, covered, e1, e2);
-        e1 = c.down(1, e1);
-        e2 = c.down(2, e2);
-        k += zb.w;
+    if COVERED {
+        let covered = low_bits(n);
+        let (mut e1, mut e2) = (c.row(1, e[1]), c.row(2, e[2]));
+        for _ in 0..rows {
+            c.test_row::<REVERSED, TIE>(zb, k, covered, e1, e2);
+            e1 = c.down(1, e1);
+            e2 = c.down(2, e2);
+            k += zb.w;
+        }
+        return;
     }
-}
-
-/// Depth-tests `rows` rows of `n <= 8` pixels from tile index `k` and *biased* edge values `e`
-/// at its first pixel, testing coverage per pixel.
-#[inline(always)]
-fn test_partial<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
-    zb: &mut ZBuffer<'t>,
-    c: &L,
-    mut k: usize,
-    n: u32,
-    rows: u32,
-    e: [i64; 3],
-) {
     let mut ev = each(|i| c.row(i, e[i]));
     for _ in 0..rows {
         let mask = c.inside(&ev) & low_bits(n);
@@ -448,18 +899,14 @@ fn test_partial<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
 
 /// Depth-tests the pixels of the tile covered by triangle `idx` of the tile list.
 #[inline(always)]
-fn draw<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
-    zb: &mut ZBuffer<'t>,
-    idx: u32,
-    ef: &EdgeFns,
-) {
+fn draw<'t, T: Lanes, const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer<'t>, idx: u32, ef: &EdgeFns) {
     let tri = zb.tris[idx as usize];
     let [tx0, ty0, ..] = zb.rect;
     let [x0, y0, x1, y1] = clip_to_tile(zb.rect, tri.bbox);
     if x0 >= x1 || y0 >= y1 {
         return;
     }
-    let c = L::new(tri, idx, ef, zb.tie);
+    let c = Triangle::<T>::new(tri, idx, ef, zb.tie);
     let (sx, sy, bias) = (ef.sx, ef.sy, ef.bias);
     let w = zb.w;
     let index = |x: u32, y: u32| (y - ty0) as usize * w + (x - tx0) as usize;
@@ -479,17 +926,17 @@ fn draw<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
         while x < x1 {
             let d = i64::from(x - x0);
             let e = each(|i| e[i] + bias[i] + sx[i] * d);
-            test_covered::<L, REVERSED, TIE>(zb, &c, index(x, y0), (x1 - x).min(BLOCK), y1 - y0, e);
+            test_block::<T, REVERSED, TIE, true>(zb, &c, index(x, y0), (x1 - x).min(BLOCK), y1 - y0, e);
             x += BLOCK;
         }
         return;
     }
     if let Some(edges) = QuadEdges::fit(ef, each(|i| e[i] + bias[i]), [x0, y0, x1, y1]) {
-        draw_quads::<L, REVERSED, TIE>(zb, idx, [x0, y0, x1, y1], &edges);
+        draw_quads::<T, REVERSED, TIE>(zb, idx, [x0, y0, x1, y1], &edges);
         return;
     }
     if x1 - x0 <= BLOCK && y1 - y0 <= BLOCK {
-        test_partial::<L, REVERSED, TIE>(zb, &c, index(x0, y0), x1 - x0, y1 - y0, e);
+        test_block::<T, REVERSED, TIE, false>(zb, &c, index(x0, y0), x1 - x0, y1 - y0, e);
         return;
     }
 
@@ -515,9 +962,9 @@ fn draw<'t, L: Lanes<'t>, const REVERSED: bool, const TIE: bool>(
                 let (k, n, rows) = (index(px0, py0), px1 - px0, py1 - py0);
                 if accepted {
                     let e = each(|i| e[i] + bias[i]);
-                    test_covered::<L, REVERSED, TIE>(zb, &c, k, n, rows, e);
+                    test_block::<T, REVERSED, TIE, true>(zb, &c, k, n, rows, e);
                 } else {
-                    test_partial::<L, REVERSED, TIE>(zb, &c, k, n, rows, e);
+                    test_block::<T, REVERSED, TIE, false>(zb, &c, k, n, rows, e);
                 }
             }
             eb = each(|i| eb[i] + block_sx[i]);
@@ -536,7 +983,7 @@ pub(crate) fn draw_all_avx2<const REVERSED: bool, const TIE: bool>(zb: &mut ZBuf
 /// Depth-tests every triangle of the tile with the AVX-512 kernel.
 #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
 pub(crate) fn draw_all_avx512<const REVERSED: bool, const TIE: bool>(zb: &mut ZBuffer) {
-    draw_all::<Avx512, REVERSED, TIE>(zb);
+    draw_all::<Avx512x8, REVERSED, TIE>(zb);
 }
 
 /// `2^52 + 2^51` as the bits of an `f64`: for an integer `|n| < 2^51`, the `f64` with bits
@@ -586,13 +1033,6 @@ fn lanes_avx2(mask: u32) -> __m256i {
     }
 }
 
-/// `|x|` per lane (clears the sign bits).
-#[inline(always)]
-fn abs_ps(x: __m256) -> __m256 {
-    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
-    unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), x) }
-}
-
 /// Lane `j` set iff depths `d[j]` and `cur[j]` are a tie for the window `tie`:
 /// [`crate::zbuf::in_tie_window`] with the same `f32` operations, as a lane mask.
 ///
@@ -606,26 +1046,22 @@ fn abs_ps(x: __m256) -> __m256 {
 /// zero maximum, which makes `limit` `-0` instead of `+0`, and `diff <= limit` is the same for
 /// both (`diff >= 0`).
 #[inline(always)]
-fn tie_window<const REVERSED: bool>(d: __m256, cur: __m256, tie: __m256) -> __m256 {
-    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
+fn tie_window<T: Lanes, const REVERSED: bool>(d: __m256, cur: __m256, tie: __m256) -> T::M {
+    // SAFETY: see `Lanes`.
     unsafe {
-        let diff = abs_ps(_mm256_sub_ps(d, cur));
-        let limit = _mm256_mul_ps(tie, _mm256_max_ps(d, cur));
-        let in_window = _mm256_cmp_ps::<_CMP_LE_OQ>(diff, limit);
-        if REVERSED {
-            in_window
-        } else {
-            _mm256_and_ps(in_window, _mm256_cmp_ps::<_CMP_LT_OQ>(cur, _mm256_set1_ps(f32::INFINITY)))
-        }
+        let diff = T::abs(T::sub(d, cur));
+        let limit = T::mul(tie, T::max(d, cur));
+        let in_window = T::le(diff, limit);
+        if REVERSED { in_window } else { T::and(in_window, T::lt(cur, T::splat(f32::INFINITY))) }
     }
 }
 
 /// `clamp_depth` per lane: `min(max(d, lo), hi)` with `d` as the first operand of each, which
 /// is [`crate::setup::clamp_depth`]'s comparisons exactly.
 #[inline(always)]
-fn clamp_ps(d: __m256, lo: __m256, hi: __m256) -> __m256 {
-    // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
-    unsafe { _mm256_min_ps(_mm256_max_ps(d, lo), hi) }
+fn clamp<T: Lanes>(d: __m256, lo: __m256, hi: __m256) -> __m256 {
+    // SAFETY: see `Lanes`.
+    unsafe { T::min(T::max(d, lo), hi) }
 }
 
 /// 4 entries of a tile buffer from `k` on (bounds-checked).
@@ -634,471 +1070,36 @@ fn quad_of<T>(buf: &mut [T], k: usize) -> &mut [T; 4] {
     (&mut buf[k..k + 4]).try_into().unwrap()
 }
 
-/// Tile index of lane `j` of a 4 x 2 quad from tile index `k` (see [`Lanes::test_quad`]).
+/// Tile index of lane `j` of a 4 x 2 quad from tile index `k` (see [`test_quad`]).
 #[inline(always)]
 fn quad_index(k: usize, w: usize, j: usize) -> usize {
     k + (j & 3) + (j >> 2) * w
-}
-
-/// The per-triangle constants of the AVX2 depth test.
-struct Depth2<'t> {
-    tri: &'t SetupTri,
-    idx: __m256i,
-    z0: __m256d,
-    dz: [__m256d; 2],
-    /// The clamp range and the tie window, in every lane.
-    lo: __m256,
-    hi: __m256,
-    tie: __m256,
-}
-
-impl<'t> Depth2<'t> {
-    #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, tie: f32) -> Self {
-        let (dz, [lo, hi]) = (tri.dz(), tri.range());
-        // SAFETY: see `Lanes`.
-        unsafe {
-            Self {
-                tri,
-                idx: _mm256_set1_epi32(idx as i32),
-                z0: _mm256_set1_pd(tri.z0()),
-                dz: [_mm256_set1_pd(dz[0]), _mm256_set1_pd(dz[1])],
-                lo: _mm256_set1_ps(lo),
-                hi: _mm256_set1_ps(hi),
-                tie: _mm256_set1_ps(tie),
-            }
-        }
-    }
-
-    /// Depth of 4 pixels from their unbiased `e1`, `e2` (as `f64`): `(z0 + e1 dz0) + e2 dz1` as
-    /// [`SetupTri::depth`], rounded to `f32` (not yet clamped). Lanes of uncovered pixels may
-    /// hold garbage; they are masked out by the caller.
-    #[inline(always)]
-    fn depth4(&self, e1: __m256d, e2: __m256d) -> __m128 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let d = _mm256_add_pd(
-                _mm256_add_pd(self.z0, _mm256_mul_pd(e1, self.dz[0])),
-                _mm256_mul_pd(e2, self.dz[1]),
-            );
-            _mm256_cvtpd_ps(d)
-        }
-    }
-
-    /// The `covered` lanes (a lane mask) where the fragment, of depths `d`, replaces the z-buffer
-    /// entries `cur` (lane `j`: the pixel at tile index `index(j)`), as a lane mask.
-    #[inline(always)]
-    fn update<const REVERSED: bool, const TIE: bool>(
-        &self,
-        zb: &ZBuffer,
-        d: __m256,
-        cur: __m256,
-        covered: __m256i,
-        index: impl Fn(usize) -> usize,
-    ) -> __m256 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let closer = _mm256_castps_si256(if REVERSED {
-                _mm256_cmp_ps::<_CMP_GT_OQ>(d, cur)
-            } else {
-                _mm256_cmp_ps::<_CMP_LT_OQ>(d, cur)
-            });
-            // Lanes decided by the id: equal depths, or with `TIE` depths in the window (which
-            // the depth comparison then must not decide).
-            let tied = if TIE {
-                tie_window::<REVERSED>(d, cur, self.tie)
-            } else {
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(d, cur)
-            };
-            let ties = _mm256_and_si256(_mm256_castps_si256(tied), covered);
-            let mut update = if TIE {
-                _mm256_andnot_si256(ties, _mm256_and_si256(closer, covered))
-            } else {
-                _mm256_and_si256(closer, covered)
-            };
-            let ties = _mm256_movemask_ps(_mm256_castsi256_ps(ties)) as u32;
-            if ties != 0 {
-                let mut d_arr = [0.0f32; 8];
-                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
-                let won = tie_winners::<REVERSED, TIE>(zb, index, self.tri, &d_arr, ties);
-                update = _mm256_or_si256(update, lanes_avx2(won));
-            }
-            _mm256_castsi256_ps(update)
-        }
-    }
-}
-
-/// The AVX2 backend: a row is two vectors of 4 `i64`.
-struct Avx2<'t> {
-    depth: Depth2<'t>,
-    /// `[0, s, 2 s, 3 s]` and `4 s` for each edge's x step `s`.
-    off: [__m256i; 3],
-    step4: [__m256i; 3],
-    /// Each edge's y step and fill-rule bias, in every lane.
-    sy: [__m256i; 3],
-    bias: [__m256i; 3],
-    /// Whether edge values may reach `2^51` and need [`to_f64_exact_avx2`]: covered samples
-    /// have `0 <= e_i <= area` ([`EdgeFns::area`]), so only triangles with `area >= 2^51`
-    /// (hundreds of thousands of pixels across: guard-band triangles) do; [`to_f64_avx2`] is
-    /// exact for the others.
-    wide: bool,
-}
-
-impl<'t> Lanes<'t> for Avx2<'t> {
-    type Row = [__m256i; 2];
-    type Depth = Depth2<'t>;
-
-    #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            Self {
-                depth: Depth2::new(tri, idx, tie),
-                off: each(|i| _mm256_setr_epi64x(0, ef.sx[i], 2 * ef.sx[i], 3 * ef.sx[i])),
-                step4: each(|i| _mm256_set1_epi64x(4 * ef.sx[i])),
-                sy: each(|i| _mm256_set1_epi64x(ef.sy[i])),
-                bias: each(|i| _mm256_set1_epi64x(ef.bias[i])),
-                wide: ef.area >= 1 << 51,
-            }
-        }
-    }
-
-    #[inline(always)]
-    fn row(&self, i: usize, e: i64) -> Self::Row {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let lo = _mm256_add_epi64(_mm256_set1_epi64x(e), self.off[i]);
-            [lo, _mm256_add_epi64(lo, self.step4[i])]
-        }
-    }
-
-    #[inline(always)]
-    fn down(&self, i: usize, [lo, hi]: Self::Row) -> Self::Row {
-        // SAFETY: see `Lanes`.
-        unsafe { [_mm256_add_epi64(lo, self.sy[i]), _mm256_add_epi64(hi, self.sy[i])] }
-    }
-
-    #[inline(always)]
-    fn unbias(&self, i: usize, [lo, hi]: Self::Row) -> Self::Row {
-        // SAFETY: see `Lanes`.
-        unsafe { [_mm256_add_epi64(lo, self.bias[i]), _mm256_add_epi64(hi, self.bias[i])] }
-    }
-
-    #[inline(always)]
-    fn inside(&self, r: &[Self::Row; 3]) -> u32 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let lo = _mm256_or_si256(_mm256_or_si256(r[0][0], r[1][0]), r[2][0]);
-            let hi = _mm256_or_si256(_mm256_or_si256(r[0][1], r[1][1]), r[2][1]);
-            // Sign bits of the ORs: set iff some edge value of the lane is negative.
-            let outside = _mm256_movemask_pd(_mm256_castsi256_pd(lo))
-                | _mm256_movemask_pd(_mm256_castsi256_pd(hi)) << 4;
-            !(outside as u32) & 0xff
-        }
-    }
-
-    #[inline(always)]
-    fn test_row<const REVERSED: bool, const TIE: bool>(
-        &self,
-        zb: &mut ZBuffer<'t>,
-        k: usize,
-        covered: u32,
-        e1: Self::Row,
-        e2: Self::Row,
-    ) {
-        let c = &self.depth;
-        // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
-        unsafe {
-            let (lo, hi) = if self.wide {
-                let f = to_f64_exact_avx2;
-                (c.depth4(f(e1[0]), f(e2[0])), c.depth4(f(e1[1]), f(e2[1])))
-            } else {
-                let f = to_f64_avx2;
-                (c.depth4(f(e1[0]), f(e2[0])), c.depth4(f(e1[1]), f(e2[1])))
-            };
-            let d = clamp_ps(_mm256_set_m128(hi, lo), c.lo, c.hi);
-            let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
-            let update = c.update::<REVERSED, TIE>(zb, d, cur, lanes_avx2(covered), |j| k + j);
-            let depth = row_of(&mut zb.depth, k);
-            _mm256_storeu_ps(depth.as_mut_ptr(), _mm256_blendv_ps(cur, d, update));
-            let win = row_of(&mut zb.win, k);
-            let old = _mm256_castsi256_ps(_mm256_loadu_si256(win.as_ptr().cast()));
-            let new = _mm256_blendv_ps(old, _mm256_castsi256_ps(c.idx), update);
-            _mm256_storeu_si256(win.as_mut_ptr().cast(), _mm256_castps_si256(new));
-        }
-    }
-
-    #[inline(always)]
-    fn depth(tri: &'t SetupTri, idx: u32, tie: f32) -> Self::Depth {
-        Depth2::new(tri, idx, tie)
-    }
-
-    #[inline(always)]
-    fn test_quad<const REVERSED: bool, const TIE: bool>(
-        c: &Self::Depth,
-        zb: &mut ZBuffer<'t>,
-        k: usize,
-        covered: u32,
-        e1: __m256i,
-        e2: __m256i,
-    ) {
-        let w = zb.w;
-        // SAFETY: see `Lanes`; the loads and stores access the 4 elements of `quad_of` slices.
-        unsafe {
-            let half = |e: __m256i, h: bool| {
-                _mm256_cvtepi32_pd(if h {
-                    _mm256_extracti128_si256::<1>(e)
-                } else {
-                    _mm256_castsi256_si128(e)
-                })
-            };
-            let lo = c.depth4(half(e1, false), half(e2, false));
-            let hi = c.depth4(half(e1, true), half(e2, true));
-            let d = clamp_ps(_mm256_set_m128(hi, lo), c.lo, c.hi);
-            let load = |buf: &mut [f32], k: usize| _mm_loadu_ps(quad_of(buf, k).as_ptr());
-            let cur = _mm256_set_m128(load(&mut zb.depth, k + w), load(&mut zb.depth, k));
-            let update = c.update::<REVERSED, TIE>(zb, d, cur, lanes_avx2(covered), |j| quad_index(k, w, j));
-            let new = _mm256_blendv_ps(cur, d, update);
-            _mm_storeu_ps(quad_of(&mut zb.depth, k).as_mut_ptr(), _mm256_castps256_ps128(new));
-            _mm_storeu_ps(quad_of(&mut zb.depth, k + w).as_mut_ptr(), _mm256_extractf128_ps::<1>(new));
-            let load = |buf: &mut [u32], k: usize| {
-                _mm_castsi128_ps(_mm_loadu_si128(quad_of(buf, k).as_ptr().cast()))
-            };
-            let old = _mm256_set_m128(load(&mut zb.win, k + w), load(&mut zb.win, k));
-            let new = _mm256_castps_si256(_mm256_blendv_ps(old, _mm256_castsi256_ps(c.idx), update));
-            _mm_storeu_si128(quad_of(&mut zb.win, k).as_mut_ptr().cast(), _mm256_castsi256_si128(new));
-            _mm_storeu_si128(
-                quad_of(&mut zb.win, k + w).as_mut_ptr().cast(),
-                _mm256_extracti128_si256::<1>(new),
-            );
-        }
-    }
-}
-
-/// The per-triangle constants of the AVX-512 depth test.
-struct Depth512<'t> {
-    tri: &'t SetupTri,
-    idx: __m256i,
-    z0: __m512d,
-    dz: [__m512d; 2],
-    /// The clamp range and the tie window, in every lane.
-    lo: __m256,
-    hi: __m256,
-    tie: __m256,
-}
-
-impl<'t> Depth512<'t> {
-    #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, tie: f32) -> Self {
-        let (dz, [lo, hi]) = (tri.dz(), tri.range());
-        // SAFETY: see `Lanes`.
-        unsafe {
-            Self {
-                tri,
-                idx: _mm256_set1_epi32(idx as i32),
-                z0: _mm512_set1_pd(tri.z0()),
-                dz: [_mm512_set1_pd(dz[0]), _mm512_set1_pd(dz[1])],
-                lo: _mm256_set1_ps(lo),
-                hi: _mm256_set1_ps(hi),
-                tie: _mm256_set1_ps(tie),
-            }
-        }
-    }
-
-    /// `(z0 + e1 dz0) + e2 dz1` from the unbiased `e1`, `e2` as `f64`, as [`SetupTri::depth`],
-    /// rounded to `f32` and clamped.
-    #[inline(always)]
-    fn depth8(&self, e1: __m512d, e2: __m512d) -> __m256 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let d = _mm512_add_pd(
-                _mm512_add_pd(self.z0, _mm512_mul_pd(e1, self.dz[0])),
-                _mm512_mul_pd(e2, self.dz[1]),
-            );
-            clamp_ps(_mm512_cvtpd_ps(d), self.lo, self.hi)
-        }
-    }
-
-    /// The `covered` lanes where the fragment, of depths `d`, replaces the z-buffer entries
-    /// `cur` (lane `j`: the pixel at tile index `index(j)`), as in the AVX2 backend.
-    #[inline(always)]
-    fn update<const REVERSED: bool, const TIE: bool>(
-        &self,
-        zb: &ZBuffer,
-        d: __m256,
-        cur: __m256,
-        covered: __mmask8,
-        index: impl Fn(usize) -> usize,
-    ) -> __mmask8 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let closer = if REVERSED {
-                _mm256_mask_cmp_ps_mask::<_CMP_GT_OQ>(covered, d, cur)
-            } else {
-                _mm256_mask_cmp_ps_mask::<_CMP_LT_OQ>(covered, d, cur)
-            };
-            let (mut update, ties) = if TIE {
-                let ties = _mm256_movemask_ps(tie_window::<REVERSED>(d, cur, self.tie)) as __mmask8 & covered;
-                (closer & !ties, ties)
-            } else {
-                (closer, _mm256_mask_cmp_ps_mask::<_CMP_EQ_OQ>(covered, d, cur))
-            };
-            if ties != 0 {
-                let mut d_arr = [0.0f32; 8];
-                _mm256_storeu_ps(d_arr.as_mut_ptr(), d);
-                update |=
-                    tie_winners::<REVERSED, TIE>(zb, index, self.tri, &d_arr, u32::from(ties)) as __mmask8;
-            }
-            update
-        }
-    }
-}
-
-/// The AVX-512 backend: a row is one vector of 8 `i64`, masks are mask registers, and the
-/// `i64 -> f64` conversion is a single instruction rounding like `as f64`, so every triangle
-/// can take it.
-struct Avx512<'t> {
-    depth: Depth512<'t>,
-    /// `[0, s, .., 7 s]` for each edge's x step `s`.
-    off: [__m512i; 3],
-    /// Each edge's y step and fill-rule bias, in every lane.
-    sy: [__m512i; 3],
-    bias: [__m512i; 3],
-}
-
-impl<'t> Lanes<'t> for Avx512<'t> {
-    type Row = __m512i;
-    type Depth = Depth512<'t>;
-
-    #[inline(always)]
-    fn new(tri: &'t SetupTri, idx: u32, ef: &EdgeFns, tie: f32) -> Self {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            let j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
-            Self {
-                depth: Depth512::new(tri, idx, tie),
-                // Exact: |7 s| < 2^40 (module docs of `setup`).
-                off: each(|i| _mm512_mullo_epi64(j, _mm512_set1_epi64(ef.sx[i]))),
-                sy: each(|i| _mm512_set1_epi64(ef.sy[i])),
-                bias: each(|i| _mm512_set1_epi64(ef.bias[i])),
-            }
-        }
-    }
-
-    #[inline(always)]
-    fn row(&self, i: usize, e: i64) -> Self::Row {
-        // SAFETY: see `Lanes`.
-        unsafe { _mm512_add_epi64(_mm512_set1_epi64(e), self.off[i]) }
-    }
-
-    #[inline(always)]
-    fn down(&self, i: usize, r: Self::Row) -> Self::Row {
-        // SAFETY: see `Lanes`.
-        unsafe { _mm512_add_epi64(r, self.sy[i]) }
-    }
-
-    #[inline(always)]
-    fn unbias(&self, i: usize, r: Self::Row) -> Self::Row {
-        // SAFETY: see `Lanes`.
-        unsafe { _mm512_add_epi64(r, self.bias[i]) }
-    }
-
-    #[inline(always)]
-    fn inside(&self, r: &[Self::Row; 3]) -> u32 {
-        // SAFETY: see `Lanes`.
-        unsafe {
-            // 0xfe: a | b | c. Its sign bit is set iff some edge value is negative.
-            let any = _mm512_ternarylogic_epi64::<0xfe>(r[0], r[1], r[2]);
-            u32::from(!_mm512_movepi64_mask(any))
-        }
-    }
-
-    #[inline(always)]
-    fn test_row<const REVERSED: bool, const TIE: bool>(
-        &self,
-        zb: &mut ZBuffer<'t>,
-        k: usize,
-        covered: u32,
-        e1: Self::Row,
-        e2: Self::Row,
-    ) {
-        let c = &self.depth;
-        // SAFETY: see `Lanes`; the loads and stores access the 8 elements of `row_of` slices.
-        unsafe {
-            // The conversions round like `as f64`.
-            let d = c.depth8(_mm512_cvtepi64_pd(e1), _mm512_cvtepi64_pd(e2));
-            let cur = _mm256_loadu_ps(row_of(&mut zb.depth, k).as_ptr());
-            let update = c.update::<REVERSED, TIE>(zb, d, cur, covered as __mmask8, |j| k + j);
-            _mm256_mask_storeu_ps(row_of(&mut zb.depth, k).as_mut_ptr(), update, d);
-            _mm256_mask_storeu_epi32(row_of(&mut zb.win, k).as_mut_ptr().cast(), update, c.idx);
-        }
-    }
-
-    #[inline(always)]
-    fn depth(tri: &'t SetupTri, idx: u32, tie: f32) -> Self::Depth {
-        Depth512::new(tri, idx, tie)
-    }
-
-    #[inline(always)]
-    fn test_quad<const REVERSED: bool, const TIE: bool>(
-        c: &Self::Depth,
-        zb: &mut ZBuffer<'t>,
-        k: usize,
-        covered: u32,
-        e1: __m256i,
-        e2: __m256i,
-    ) {
-        let w = zb.w;
-        // SAFETY: see `Lanes`; the loads and stores access the 4 elements of `quad_of` slices.
-        unsafe {
-            let d = c.depth8(_mm512_cvtepi32_pd(e1), _mm512_cvtepi32_pd(e2));
-            let (lo, hi) = (quad_of(&mut zb.depth, k).as_ptr(), quad_of(&mut zb.depth, k + w).as_ptr());
-            let cur = _mm256_set_m128(_mm_loadu_ps(hi), _mm_loadu_ps(lo));
-            let update = c.update::<REVERSED, TIE>(zb, d, cur, covered as __mmask8, |j| quad_index(k, w, j));
-            // Blended and stored whole rather than with masked stores: the next small triangle
-            // often reads these entries again, and a masked store cannot forward its data to a
-            // load (measured: 6 % less time on small triangles).
-            let new = _mm256_mask_blend_ps(update, cur, d);
-            _mm_storeu_ps(quad_of(&mut zb.depth, k).as_mut_ptr(), _mm256_castps256_ps128(new));
-            _mm_storeu_ps(quad_of(&mut zb.depth, k + w).as_mut_ptr(), _mm256_extractf128_ps::<1>(new));
-            let load = |buf: &mut [u32], k: usize| _mm_loadu_si128(quad_of(buf, k).as_ptr().cast());
-            let old = _mm256_set_m128i(load(&mut zb.win, k + w), load(&mut zb.win, k));
-            let new = _mm256_mask_blend_epi32(update, old, c.idx);
-            _mm_storeu_si128(quad_of(&mut zb.win, k).as_mut_ptr().cast(), _mm256_castsi256_si128(new));
-            _mm_storeu_si128(
-                quad_of(&mut zb.win, k + w).as_mut_ptr().cast(),
-                _mm256_extracti128_si256::<1>(new),
-            );
-        }
-    }
 }
 
 /// Resolves the tile with the AVX2 kernel: [`ZBuffer::resolve`]'s depths, ids and
 /// barycentrics, 8 pixels at a time ([`resolve_rows`]), emptying the z-buffer.
 #[target_feature(enable = "avx2")]
 pub(crate) fn resolve_avx2(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
-    resolve_rows::<false>(zb, depth, id, bary);
+    resolve_rows::<Avx2>(zb, depth, id, bary);
 }
 
 /// Resolves the tile with the AVX-512 kernel (see [`resolve_avx2`]).
 #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
 pub(crate) fn resolve_avx512(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
-    resolve_rows::<true>(zb, depth, id, bary);
+    resolve_rows::<Avx512x8>(zb, depth, id, bary);
 }
 
-/// The resolve of [`resolve_avx2`] and [`resolve_avx512`] (`AVX512`): for every run of 8
-/// pixels of every row of the tile (fewer at the end of a row), the ids and barycentrics of
-/// [`resolve8_avx512`] or [`resolve8_avx2`] (called directly: a function passed as a parameter
-/// is not always inlined, and then cannot inline the intrinsics of its body), and the depths;
-/// then the run's z-buffer entries are emptied. That is every entry of the tile's rows, the
-/// spare row and the padding were never written (only rewritten with their values): the
-/// z-buffer is [`ZBuffer::clean`] afterwards.
+/// The resolve of [`resolve_avx2`] and [`resolve_avx512`]: for every run of 8 pixels of every
+/// row of the tile (fewer at the end of a row), the ids and barycentrics of [`resolve8`], and
+/// the depths; then the run's z-buffer entries are emptied. That is every entry of the tile's
+/// rows, the spare row and the padding were never written (only rewritten with their values):
+/// the z-buffer is [`ZBuffer::clean`] afterwards.
 #[inline(always)]
-fn resolve_rows<const AVX512: bool>(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
+fn resolve_rows<T: Lanes>(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows<u32>, bary: Rows<[f32; 2]>) {
     let [tx0, ty0, ..] = zb.rect;
     let w = zb.w;
-    // SAFETY: AVX2 is available (only called from `resolve_avx2` and `resolve_avx512`); the
-    // loads and stores access 8 elements of `row_of` slices, or of a chunk of exactly 8.
+    // SAFETY: see `Lanes` (only called from `resolve_avx2` and `resolve_avx512`); the loads and
+    // stores access 8 elements of `row_of` slices, or of a chunk of exactly 8.
     unsafe {
         let empty = (_mm256_set1_epi32(zb.empty_bits() as i32), _mm256_set1_epi32(NONE as i32));
         for (r, ((d_row, i_row), b_row)) in depth.into_iter().zip(id).zip(bary).enumerate() {
@@ -1106,11 +1107,7 @@ fn resolve_rows<const AVX512: bool>(zb: &mut ZBuffer, depth: Rows<f32>, id: Rows
             for (c, ((d, i), b)) in chunks.zip(b_row.chunks_mut(BLOCK as usize)).enumerate() {
                 let k = r * w + c * BLOCK as usize;
                 let (x, y) = (tx0 + (c as u32) * BLOCK, ty0 + r as u32);
-                if AVX512 {
-                    resolve8_avx512(zb, k, x, y, i, b);
-                } else {
-                    resolve8_avx2(zb, k, x, y, i, b);
-                }
+                resolve8::<T>(zb, k, x, y, i, b);
                 let cur = _mm256_loadu_si256(row_of(&mut zb.depth, k).as_ptr().cast());
                 if d.len() == BLOCK as usize {
                     _mm256_storeu_si256(d.as_mut_ptr().cast(), cur);
@@ -1144,18 +1141,19 @@ fn centres(x: u32, y: u32) -> (__m256i, __m256i) {
 }
 
 /// The vertices, ids and perspective constants of the winners of 8 pixels, one per lane (see
-/// [`resolve8_avx512`]).
-struct Winners<V, P> {
+/// [`resolve8`]).
+struct Winners {
     /// `[x0, y0, x1, y1, x2, y2]`, fixed point.
-    v: [V; 6],
-    id: V,
+    v: [__m256i; 6],
+    id: __m256i,
     /// `persp[i][c]` of [`SetupTri::persp`] at `3 i + c`.
-    p: [P; 9],
+    p: [__m256; 9],
 }
 
 /// Edge `a -> b` (the edge opposite vertex `i` is `(i + 1) % 3 -> (i + 2) % 3`, as in
 /// [`EdgeFns::new`]) as its coordinate differences, `[d.x, d.y, p.y - a.y, p.x - a.x]` at the
-/// pixel centres `(px, py)`, each lane in `i32` (below `2^29` in magnitude).
+/// pixel centres `(px, py)`, each lane in `i32` (below `2^29` in magnitude): the terms of
+/// [`Lanes::edge`].
 #[inline(always)]
 fn edge_terms(v: &[__m256i; 6], a: usize, b: usize, px: __m256i, py: __m256i) -> [__m256i; 4] {
     // SAFETY: only called from AVX2 or AVX-512 code (see `Lanes`).
@@ -1170,33 +1168,15 @@ fn edge_terms(v: &[__m256i; 6], a: usize, b: usize, px: __m256i, py: __m256i) ->
     }
 }
 
-/// `d.x (p.y - a.y) - d.y (p.x - a.x)` from [`edge_terms`]: [`EdgeFns::at_pixel`], exact (each
-/// product of two `i32` is exact in `i64`, and the edge function is below `2^60`), as `f64`
-/// rounded like `as f64`.
-#[inline(always)]
-fn edge_avx512(t: [__m256i; 4]) -> __m512d {
-    // SAFETY: only called from AVX-512 code (see `Lanes`).
-    unsafe {
-        let wide = |r| _mm512_cvtepi32_epi64(r);
-        let [dx, dy, ry, rx] = [wide(t[0]), wide(t[1]), wide(t[2]), wide(t[3])];
-        _mm512_cvtepi64_pd(_mm512_sub_epi64(_mm512_mul_epi32(dx, ry), _mm512_mul_epi32(dy, rx)))
-    }
-}
-
 /// `(e0 q0 + e1 q1) + e2 q2`: a sum of [`SetupTri::bary`], in its order.
 #[inline(always)]
-fn dot_avx512(e: &[__m512d; 3], q: [__m512d; 3]) -> __m512d {
-    // SAFETY: only called from AVX-512 code (see `Lanes`).
-    unsafe {
-        _mm512_add_pd(
-            _mm512_add_pd(_mm512_mul_pd(e[0], q[0]), _mm512_mul_pd(e[1], q[1])),
-            _mm512_mul_pd(e[2], q[2]),
-        )
-    }
+fn dot<T: Lanes>(e: &[T::D; 3], q: [T::D; 3]) -> T::D {
+    // SAFETY: see `Lanes`.
+    unsafe { T::add_f64(T::add_f64(T::mul_f64(e[0], q[0]), T::mul_f64(e[1], q[1])), T::mul_f64(e[2], q[2])) }
 }
 
 /// The ids and barycentrics of [`ZBuffer::resolve`] for the `n = id.len() <= 8` pixels of a
-/// row from tile index `k`, pixel `(x, y)`, on, with AVX-512.
+/// row from tile index `k`, pixel `(x, y)`, on.
 ///
 /// The pixels' winners are found by comparing the 8 entries of `zb.win` with each distinct
 /// winner in turn (a few per run of 8 for small triangles, one for large ones), which blends its
@@ -1204,163 +1184,46 @@ fn dot_avx512(e: &[__m512d; 3], q: [__m512d; 3]) -> __m512d {
 /// integer edge functions at the pixel centre ([`edge_terms`]) and [`SetupTri::bary`]'s `f64`
 /// operations, in its order.
 #[inline(always)]
-fn resolve8_avx512(zb: &ZBuffer, k: usize, x: u32, y: u32, id: &mut [u32], bary: &mut [[f32; 2]]) {
+fn resolve8<T: Lanes>(zb: &ZBuffer, k: usize, x: u32, y: u32, id: &mut [u32], bary: &mut [[f32; 2]]) {
     let n = id.len();
-    // SAFETY: see `Lanes` (only called from `resolve_avx512`); the loads read the 8 elements of
-    // `win[k..k + 8]` (bounds-checked), the masked stores the first `n` elements of `id` and
-    // `bary`.
+    // SAFETY: see `Lanes` (only called from `resolve_rows`); the loads read the 8 elements of
+    // `win[k..k + 8]` (bounds-checked), the stores the first `n` elements of `id` and `bary`.
     unsafe {
         let wins = _mm256_loadu_si256(zb.win[k..k + 8].as_ptr().cast());
-        let live = _mm256_cmpneq_epi32_mask(wins, _mm256_set1_epi32(NONE as i32)) & low_bits(n as u32) as u8;
-        let mut w = Winners {
-            v: [_mm256_setzero_si256(); 6],
-            id: _mm256_set1_epi32(EMPTY_ID as i32),
-            p: [_mm256_setzero_ps(); 9],
-        };
-        let mut rem = live;
+        let live = T::and_not(T::mask(low_bits(n as u32)), T::eq_i(wins, T::splat_i(NONE as i32)));
+        let mut w = Winners { v: [T::splat_i(0); 6], id: T::splat_i(EMPTY_ID as i32), p: [T::splat(0.0); 9] };
+        let mut rem = T::bits(live);
         while rem != 0 {
             let win = zb.win[k + rem.trailing_zeros() as usize];
-            let m = _mm256_mask_cmpeq_epi32_mask(rem, wins, _mm256_set1_epi32(win as i32));
-            rem &= !m;
+            // Lanes from `n` on may have the same winner: they are blended, but not stored.
+            let m = T::eq_i(wins, T::splat_i(win as i32));
+            rem &= !T::bits(m);
             let tri = zb.tris[win as usize];
             for f in 0..6 {
-                w.v[f] = _mm256_mask_set1_epi32(w.v[f], m, tri.v[f / 2][f % 2]);
+                w.v[f] = T::select_i(m, T::splat_i(tri.v[f / 2][f % 2]), w.v[f]);
             }
-            w.id = _mm256_mask_set1_epi32(w.id, m, tri.id as i32);
+            w.id = T::select_i(m, T::splat_i(tri.id as i32), w.id);
             let persp = tri.persp();
             for f in 0..9 {
-                w.p[f] = _mm256_mask_mov_ps(w.p[f], m, _mm256_set1_ps(persp[f / 3][f % 3]));
+                w.p[f] = T::select(m, T::splat(persp[f / 3][f % 3]), w.p[f]);
             }
         }
         let (px, py) = centres(x, y);
         let e = [
-            edge_avx512(edge_terms(&w.v, 1, 2, px, py)),
-            edge_avx512(edge_terms(&w.v, 2, 0, px, py)),
-            edge_avx512(edge_terms(&w.v, 0, 1, px, py)),
+            T::edge(edge_terms(&w.v, 1, 2, px, py)),
+            T::edge(edge_terms(&w.v, 2, 0, px, py)),
+            T::edge(edge_terms(&w.v, 0, 1, px, py)),
         ];
-        let mut q = [_mm512_setzero_pd(); 9];
+        let wide = T::needs_wide(&e, live);
+        let e = [T::i64_to_f64(e[0], wide), T::i64_to_f64(e[1], wide), T::i64_to_f64(e[2], wide)];
+        let mut q = [T::splat_f64(0.0); 9];
         for (q, p) in q.iter_mut().zip(w.p) {
-            *q = _mm512_cvtps_pd(p);
+            *q = T::f32_to_f64(p);
         }
-        let den = dot_avx512(&e, [q[0], q[3], q[6]]);
-        // `!(den <= 0)`: the lanes `SetupTri::bary` divides in (the others are `+0`).
-        let ok = _mm512_mask_cmp_pd_mask::<_CMP_NLE_UQ>(live, den, _mm512_setzero_pd());
-        let b1 = _mm512_cvtpd_ps(_mm512_maskz_div_pd(ok, dot_avx512(&e, [q[1], q[4], q[7]]), den));
-        let b2 = _mm512_cvtpd_ps(_mm512_maskz_div_pd(ok, dot_avx512(&e, [q[2], q[5], q[8]]), den));
-        let pairs = _mm512_permutex2var_ps(
-            _mm512_castps256_ps512(b1),
-            _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23),
-            _mm512_castps256_ps512(b2),
-        );
-        _mm256_mask_storeu_epi32(id.as_mut_ptr().cast(), low_bits(n as u32) as u8, w.id);
-        _mm512_mask_storeu_ps(bary.as_mut_ptr().cast(), low_bits(2 * n as u32) as u16, pairs);
-    }
-}
-
-/// Lanes 0-3 (`H = 0`) or 4-7 (`H = 1`) of 8 `i32`, sign-extended to `i64`.
-#[inline(always)]
-fn half_epi64<const H: i32>(r: __m256i) -> __m256i {
-    // SAFETY: only called from AVX2 code (see `Lanes`).
-    unsafe { _mm256_cvtepi32_epi64(_mm256_extracti128_si256::<H>(r)) }
-}
-
-/// [`edge_avx512`] for lanes `4 H..4 H + 4`, as `i64`.
-#[inline(always)]
-fn edge_avx2<const H: i32>(t: [__m256i; 4]) -> __m256i {
-    // SAFETY: only called from AVX2 code (see `Lanes`).
-    unsafe {
-        let [dx, dy, ry, rx] =
-            [half_epi64::<H>(t[0]), half_epi64::<H>(t[1]), half_epi64::<H>(t[2]), half_epi64::<H>(t[3])];
-        _mm256_sub_epi64(_mm256_mul_epi32(dx, ry), _mm256_mul_epi32(dy, rx))
-    }
-}
-
-/// [`dot_avx512`] on 4 lanes.
-#[inline(always)]
-fn dot_avx2(e: &[__m256d; 3], q: [__m256d; 3]) -> __m256d {
-    // SAFETY: only called from AVX2 code (see `Lanes`).
-    unsafe {
-        _mm256_add_pd(
-            _mm256_add_pd(_mm256_mul_pd(e[0], q[0]), _mm256_mul_pd(e[1], q[1])),
-            _mm256_mul_pd(e[2], q[2]),
-        )
-    }
-}
-
-/// The barycentric pairs `[b1, b2]` of lanes `4 H..4 H + 4` of [`resolve8_avx2`].
-#[inline(always)]
-fn bary4_avx2<const H: i32>(w: &Winners<__m256i, __m256>, live: __m256i, px: __m256i, py: __m256i) -> __m256 {
-    // SAFETY: only called from AVX2 code (see `Lanes`).
-    unsafe {
-        let e = [
-            edge_avx2::<H>(edge_terms(&w.v, 1, 2, px, py)),
-            edge_avx2::<H>(edge_terms(&w.v, 2, 0, px, py)),
-            edge_avx2::<H>(edge_terms(&w.v, 0, 1, px, py)),
-        ];
-        // Covered samples have `0 <= e_i`: a live lane converts exactly with `to_f64_avx2` iff no
-        // bit from 51 on is set; otherwise (guard-band sized triangles) with the longer
-        // `to_f64_exact_avx2`.
-        let live = half_epi64::<H>(live);
-        let big = _mm256_and_si256(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]), live);
-        let e = if _mm256_testz_si256(big, _mm256_set1_epi64x(!((1 << 51) - 1))) != 0 {
-            [to_f64_avx2(e[0]), to_f64_avx2(e[1]), to_f64_avx2(e[2])]
-        } else {
-            [to_f64_exact_avx2(e[0]), to_f64_exact_avx2(e[1]), to_f64_exact_avx2(e[2])]
-        };
-        let mut q = [_mm256_setzero_pd(); 9];
-        for (q, p) in q.iter_mut().zip(w.p) {
-            *q = _mm256_cvtps_pd(_mm256_extractf128_ps::<H>(p));
-        }
-        let den = dot_avx2(&e, [q[0], q[3], q[6]]);
-        let ok =
-            _mm256_and_pd(_mm256_cmp_pd::<_CMP_NLE_UQ>(den, _mm256_setzero_pd()), _mm256_castsi256_pd(live));
-        let b1 = _mm256_cvtpd_ps(_mm256_and_pd(_mm256_div_pd(dot_avx2(&e, [q[1], q[4], q[7]]), den), ok));
-        let b2 = _mm256_cvtpd_ps(_mm256_and_pd(_mm256_div_pd(dot_avx2(&e, [q[2], q[5], q[8]]), den), ok));
-        _mm256_set_m128(_mm_unpackhi_ps(b1, b2), _mm_unpacklo_ps(b1, b2))
-    }
-}
-
-/// [`resolve8_avx512`] with AVX2: masks are vectors, and the `f64` work is done in two halves
-/// of 4 lanes ([`bary4_avx2`]).
-#[inline(always)]
-fn resolve8_avx2(zb: &ZBuffer, k: usize, x: u32, y: u32, id: &mut [u32], bary: &mut [[f32; 2]]) {
-    let n = id.len();
-    // SAFETY: see `Lanes` (only called from `resolve_avx2`); the loads read the 8 elements of
-    // `win[k..k + 8]` (bounds-checked), the stores 8 elements of arrays or of `id` and `bary`
-    // (`n == 8`).
-    unsafe {
-        let wins = _mm256_loadu_si256(zb.win[k..k + 8].as_ptr().cast());
-        let empty = _mm256_cmpeq_epi32(wins, _mm256_set1_epi32(NONE as i32));
-        let live = _mm256_andnot_si256(empty, lanes_avx2(low_bits(n as u32)));
-        let mut w = Winners {
-            v: [_mm256_setzero_si256(); 6],
-            id: _mm256_set1_epi32(EMPTY_ID as i32),
-            p: [_mm256_setzero_ps(); 9],
-        };
-        let mut rem = _mm256_movemask_ps(_mm256_castsi256_ps(live)) as u32;
-        while rem != 0 {
-            let win = zb.win[k + rem.trailing_zeros() as usize];
-            let m = _mm256_cmpeq_epi32(wins, _mm256_set1_epi32(win as i32));
-            rem &= !(_mm256_movemask_ps(_mm256_castsi256_ps(m)) as u32);
-            let tri = zb.tris[win as usize];
-            for f in 0..6 {
-                w.v[f] = _mm256_blendv_epi8(w.v[f], _mm256_set1_epi32(tri.v[f / 2][f % 2]), m);
-            }
-            w.id = _mm256_blendv_epi8(w.id, _mm256_set1_epi32(tri.id as i32), m);
-            let persp = tri.persp();
-            for f in 0..9 {
-                let c = _mm256_set1_ps(persp[f / 3][f % 3]);
-                w.p[f] = _mm256_blendv_ps(w.p[f], c, _mm256_castsi256_ps(m));
-            }
-        }
-        let (px, py) = centres(x, y);
-        let (lo, hi) = (bary4_avx2::<0>(&w, live, px, py), bary4_avx2::<1>(&w, live, px, py));
-        let mut pairs = [[0.0f32; 2]; 8];
-        _mm256_storeu_ps(pairs.as_mut_ptr().cast(), lo);
-        _mm256_storeu_ps(pairs[4..].as_mut_ptr().cast(), hi);
-        let mut ids = [0u32; 8];
-        _mm256_storeu_si256(ids.as_mut_ptr().cast(), w.id);
-        id[..n].copy_from_slice(&ids[..n]);
-        bary[..n].copy_from_slice(&pairs[..n]);
+        let den = dot::<T>(&e, [q[0], q[3], q[6]]);
+        let b1 = T::quotient(dot::<T>(&e, [q[1], q[4], q[7]]), den, live);
+        let b2 = T::quotient(dot::<T>(&e, [q[2], q[5], q[8]]), den, live);
+        T::store_ids(id, w.id);
+        T::store_pairs(bary, b1, b2);
     }
 }

@@ -47,14 +47,15 @@ fn each<T>(mut f: impl FnMut(usize) -> T) -> [T; 3] {
     [f(0), f(1), f(2)]
 }
 
-/// What the depth test needs of a tier beyond its [`Base`] operations on 8 lanes of `f32`: 8
-/// lanes of `i64` (edge values along a row) and of `f64` (the depth before its rounding to
-/// `f32`), which AVX2 holds in two vectors of 4 and AVX-512 in one, and masked stores.
+/// What the depth test and the resolve need of a tier beyond its [`Base`] operations on 8 lanes
+/// of `f32`: 8 lanes of `i64` (edge values) and of `f64` (depths and barycentrics before their
+/// rounding to `f32`), which AVX2 holds in two vectors of 4 and AVX-512 in one, and masked
+/// stores.
 ///
 /// # Safety
 /// As [`Base`]'s: every method may be called only where the CPU runs the tier, here from the
-/// tier's `#[target_feature]` entry point ([`draw_all_avx2`], [`draw_all_avx512`]), into which
-/// the methods are inlined. That is the safety argument of the `unsafe` blocks of the generic
+/// tier's `#[target_feature]` entry points ([`draw_all_avx2`], [`draw_all_avx512`],
+/// [`resolve_avx2`], [`resolve_avx512`]), into which the methods are inlined. That is the safety argument of the `unsafe` blocks of the generic
 /// kernel, which only its entry points call.
 #[allow(clippy::missing_safety_doc)] // One contract for all, stated above.
 trait Lanes: Base<F = __m256, I = __m256i> {
@@ -107,7 +108,9 @@ trait Lanes: Base<F = __m256, I = __m256i> {
 }
 
 // Each method is one intrinsic or a few; the trait's contract (the tier) is what makes them
-// sound, so per-call `unsafe` blocks would add nothing.
+// sound, so per-call `unsafe` blocks would add nothing. The work on halves is done by
+// `#[inline(always)]` functions rather than closures: a closure is not always inlined, and
+// compiled without the target features, its intrinsics become calls.
 #[allow(unsafe_op_in_unsafe_fn)]
 impl Lanes for Avx2 {
     type L = [__m256i; 2];

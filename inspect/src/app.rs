@@ -1643,7 +1643,7 @@ fn pass_color(pass: &str) -> Color32 {
         Color32::from_rgb(160, 120, 220),
         Color32::from_rgb(250, 250, 250),
     ];
-    let top = Pass::ALL.iter().filter(|p| top_level(p.name()));
+    let top = Pass::ALL.iter().filter(|p| p.part_of().is_none());
     let i = top.clone().position(|p| p.name() == pass).unwrap_or(top.count());
     COLORS[i % COLORS.len()]
 }

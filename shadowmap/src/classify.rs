@@ -50,7 +50,7 @@
 
 use glam::Vec3;
 
-use crate::map::{EMPTY, LightMap, MapCoord, MapKind};
+use crate::map::{ABSENT, EMPTY, LightMap, MapCoord, MapKind};
 
 /// What decides whether a light reaches a point: the light's map (or, on borders, a ray).
 /// One byte per pixel and light in occlusion maps ([`crate::border`]).
@@ -243,28 +243,24 @@ impl Classifier<'_> {
         self.map.coord(p - self.map.light())
     }
 
+    /// Where `p` falls in the map at level `level` (paged maps; [`Classifier::locate`] is
+    /// level 0).
+    #[inline]
+    pub fn locate_at(&self, p: Vec3, level: u8) -> MapCoord {
+        self.map.coord_at(p - self.map.light(), level)
+    }
+
     /// Starts loading the texels around `c` into the cache. A hint only.
     #[inline]
     pub fn prefetch(&self, c: MapCoord) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            let ids = self.map.face_ids(c.face);
-            let last = self.map.resolution().saturating_sub(1);
-            let (x, y) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-            // The 2x2 footprint spans at most two block rows; the texel's own block and the one
-            // below or above it cover most footprints.
-            let y2 = if c.y - y as f32 >= 0.5 { (y + 1).min(last) } else { y.saturating_sub(1) };
-            for yy in [y, y2] {
-                if let Some(t) = ids.get(self.map.texel_index(x, yy)) {
-                    // SAFETY: prefetching has no effect on memory or on the program's state; SSE
-                    // is part of x86-64.
-                    unsafe { _mm_prefetch::<_MM_HINT_T0>((t as *const u32).cast()) };
-                }
-            }
+        let last = self.map.resolution_at(c.level).saturating_sub(1);
+        let (x, y) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
+        // The 2x2 footprint spans at most two block rows; the texel's own block and the one
+        // below or above it cover most footprints.
+        let y2 = if c.y - f64::from(y) >= 0.5 { (y + 1).min(last) } else { y.saturating_sub(1) };
+        for yy in [y, y2] {
+            self.map.prefetch(c.level, c.face, x, yy);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = c;
     }
 
     /// What [`Classifier::classify`] decides for every point in the convex hull of `corners`
@@ -301,8 +297,9 @@ impl Classifier<'_> {
     ///   arithmetic; and `|g| / r` stays above the `1e-6` below which the per-point test reads
     ///   the stored depth instead (`r` is largest at a corner: it is convex).
     ///
+    /// The corners are located at level `level` (0 for whole maps), and the region read there.
     /// Paraboloid maps are not central projections: always [`Hull::Unknown`].
-    pub fn hull(&self, corners: &[Vec3], own: u32, group: Option<u32>) -> Hull {
+    pub fn hull(&self, corners: &[Vec3], own: u32, group: Option<u32>, level: u8) -> Hull {
         let map = self.map;
         let Some(first) = corners.first() else { return Hull::Unknown };
         let Some(pl) = self.planes.get(own as usize) else { return Hull::Unknown };
@@ -312,15 +309,16 @@ impl Classifier<'_> {
         let light = map.light();
         let e = 16.0 * 3f32.sqrt() * self.point_error;
         let h = pl.offset_from(light).abs() as f32 - e;
-        let res = map.resolution() as f32;
+        let res = map.resolution_at(level) as f32;
         let margin = 1.5 + e / h * res;
         if !(h > 0.0 && margin < res) {
             return Hull::Unknown;
         }
-        let c0 = self.locate(*first);
+        let margin = f64::from(margin);
+        let c0 = self.locate_at(*first, level);
         let (mut lo, mut hi) = ((c0.x, c0.y), (c0.x, c0.y));
         for &p in &corners[1..] {
-            let c = self.locate(p);
+            let c = self.locate_at(p, level);
             if c.face != c0.face {
                 return Hull::Unknown;
             }
@@ -329,16 +327,16 @@ impl Classifier<'_> {
         }
         let (x0, y0) = ((lo.0 - margin).floor(), (lo.1 - margin).floor());
         let (x1, y1) = ((hi.0 + margin).floor(), (hi.1 + margin).floor());
-        let last = res - 1.0;
+        let last = f64::from(res) - 1.0;
         if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= last && y1 <= last) {
             return Hull::Unknown;
         }
         let (x0, y0, x1, y1) = (x0 as u32, y0 as u32, x1 as u32, y1 as u32);
-        let seen = match map.region_id(c0.face, x0, y0, x1, y1) {
+        let seen = match map.region_id(c0.face, level, x0, y0, x1, y1) {
             Some(id) if id == EMPTY || id == own => return Hull::Lit,
             Some(id) => id,
             // Several triangles: perhaps all of one plane (own's, or an occluder's).
-            None => match map.region_group(c0.face, x0, y0, x1, y1) {
+            None => match map.region_group(c0.face, level, x0, y0, x1, y1) {
                 Some(g) if Some(g) == group => {
                     // Texels of other triangles of `own`'s group lie on its very plane: they
                     // meet the ray towards a point `p` at `t` with `r - t <= r d / (h - d)`
@@ -397,10 +395,11 @@ impl Classifier<'_> {
     #[inline]
     pub fn visible_at(&self, p: Vec3, own: u32, c: MapCoord) -> bool {
         let map = self.map;
-        let last = map.resolution().saturating_sub(1);
+        let last = map.resolution_at(c.level).saturating_sub(1);
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-        let id = map.face_ids(c.face).get(map.texel_index(ix, iy)).copied().unwrap_or(EMPTY);
-        if id == EMPTY || id == own {
+        let id = map.id_at(c.level, c.face, ix, iy);
+        // A page a paged map did not draw tells nothing: visible, as an empty texel.
+        if id == EMPTY || id == own || id == ABSENT {
             return true;
         }
         Occluders::new(self, p, own, c).visible(id, (ix, iy))
@@ -423,8 +422,10 @@ impl Classifier<'_> {
         if !in_domain {
             return if self.visible_at(p, own, c) { 1.0 } else { 0.0 };
         }
-        let ids = map.face_ids(c.face);
-        let foot_ids = foot.map(|(x, y)| ids.get(map.texel_index(x, y)).copied().unwrap_or(EMPTY));
+        let foot_ids = foot.map(|(x, y)| match map.id_at(c.level, c.face, x, y) {
+            ABSENT => EMPTY,
+            id => id,
+        });
         if foot_ids.iter().all(|&id| id == EMPTY || id == own) {
             return 1.0;
         }
@@ -462,16 +463,26 @@ impl Classifier<'_> {
         let map = self.map;
         let light = map.light();
         let v = p - light;
-        let res = map.resolution();
-        let last = res.saturating_sub(1);
-        let ids = map.face_ids(c.face);
-        let at = |x: u32, y: u32| ids.get(map.texel_index(x, y)).copied().unwrap_or(EMPTY);
+        let last = map.resolution_at(c.level).saturating_sub(1);
+        let at = |x: u32, y: u32| map.id_at(c.level, c.face, x, y);
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
         let centre = at(ix, iy);
 
         let Footprint { texels: foot, inside, in_domain, .. } = Footprint::of(map, c);
         let foot_ids = if inside { foot.map(|(x, y)| at(x, y)) } else { [centre; 4] };
         let texel = [ix, iy];
+
+        // A texel in a page that a paged map did not draw: the map cannot tell (a ray decides).
+        if centre == ABSENT || foot_ids.contains(&ABSENT) {
+            return Lookup {
+                decision: Decision::Lit,
+                hint: EMPTY,
+                map_border: true,
+                ambiguous: false,
+                face: c.face,
+                texel,
+            };
+        }
 
         // Most points see only their own triangle (or nothing) all around: lit, no border, and
         // no arithmetic. This is the rule below with every texel deciding `LIT`.
@@ -504,7 +515,7 @@ impl Classifier<'_> {
             let t = if cos.abs() >= 1e-6 {
                 (pl.offset_from(light) / f64::from(cos)) as f32
             } else {
-                map.depth(c.face, x, y)
+                map.depth_at(c.level, c.face, x, y)
             };
             if !(t > near && t < r - tol) {
                 LIT
@@ -555,15 +566,15 @@ struct Footprint {
 impl Footprint {
     #[inline]
     fn of(map: &LightMap, c: MapCoord) -> Self {
-        let last = map.resolution().saturating_sub(1);
+        let last = f64::from(map.resolution_at(c.level).saturating_sub(1));
         let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
-        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last as f32 && fy + 1.0 <= last as f32;
+        let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last && fy + 1.0 <= last;
         let (x0, y0) = (fx as u32, fy as u32);
         let texels = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
         let in_domain = inside
             && (map.kind() == MapKind::Cube
                 || texels.iter().all(|&(x, y)| map.texel_in_domain(c.face, x, y)));
-        Self { texels, inside, in_domain, offset: (c.x - 0.5 - fx, c.y - 0.5 - fy) }
+        Self { texels, inside, in_domain, offset: ((c.x - 0.5 - fx) as f32, (c.y - 0.5 - fy) as f32) }
     }
 }
 
@@ -572,6 +583,7 @@ impl Footprint {
 struct Occluders<'c, 'a> {
     cls: &'c Classifier<'a>,
     face: u8,
+    level: u8,
     light: Vec3,
     r: f32,
     dir: Vec3,
@@ -586,7 +598,7 @@ impl<'c, 'a> Occluders<'c, 'a> {
         let r = v.length();
         let dir = v / r;
         let margin = cls.bias * cls.map.texel_angle(c) * r + TOLERANCE * r + cls.rounding_band(own, dir);
-        Self { cls, face: c.face, light, r, dir, margin }
+        Self { cls, face: c.face, level: c.level, light, r, dir, margin }
     }
 
     /// Whether triangle `id` (not empty, not the point's own), seen at texel `(x, y)`, leaves
@@ -600,7 +612,7 @@ impl<'c, 'a> Occluders<'c, 'a> {
         let t = if cos.abs() >= 1e-6 {
             (pl.offset_from(self.light) / f64::from(cos)) as f32
         } else {
-            self.cls.map.depth(self.face, x, y)
+            self.cls.map.depth_at(self.level, self.face, x, y)
         };
         !(t > SHADOW_EPSILON * self.r && t < self.r - self.margin)
     }

@@ -4,6 +4,7 @@
 //! - [`paraboloid`] (Heidrich and Seidel 1998; Brabec et al. 2002) and [`cube`]: the two
 //!   omnidirectional parameterisations;
 //! - [`map`]: building a light's depth map (per texel the closest triangle's id and distance);
+//! - [`paged`]: paged maps, drawn only where a frame's receivers fall, at the resolution they need;
 //! - [`vpl_map`]: a VPL's hemisphere of occluder planes or 16-bit depths, for many fast lookups;
 //! - [`classify`]: deciding a surface point lit, shadowed or undecided from a map;
 //! - [`border`]: shadow-border detection on a screen-space occlusion map (the thesis's Laplace
@@ -40,10 +41,11 @@ pub mod border;
 pub mod classify;
 pub mod cube;
 pub mod map;
+pub mod paged;
 pub mod paraboloid;
 mod tess;
 pub mod vpl_map;
 
 pub use cube::{CubeFace, cube_lookup};
-pub use map::{EMPTY, LightMap, MapCoord, MapKind, MapOptions};
+pub use map::{ABSENT, EMPTY, LightMap, MAX_LEVEL, MapCoord, MapKind, MapOptions, PAGE, PageKey};
 pub use paraboloid::{Hemisphere, paraboloid_project, paraboloid_unproject};

@@ -150,8 +150,12 @@ impl Default for MapOptions {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapCoord {
     pub face: u8,
-    pub x: f32,
-    pub y: f32,
+    /// The level (0 for whole maps).
+    pub level: u8,
+    /// Continuous texel coordinates at that level (`f64`: a paged map's fine levels have more
+    /// texels per side than `f32` has steps below one texel).
+    pub x: f64,
+    pub y: f64,
 }
 
 /// How the faces of a map are laid out.
@@ -183,16 +187,147 @@ impl Layout {
     }
 }
 
-/// One face's texels (empty when not drawn).
+/// Side of a page: a face's texels are stored, and paged maps drawn, in squares of this many
+/// texels per side.
+///
+/// Why 64: a page is then 32 KB of ids and distances, small enough that a frame's receivers
+/// fill most of each page they touch (a receiver needs about one texel at its level, and
+/// neighbouring receivers land in the same page), and large enough that the per-page costs
+/// (binning the triangles, setting up the ones that straddle pages) stay small beside the
+/// texels' own.
+pub const PAGE: u32 = 64;
+
+/// Texels of one page.
+const PAGE_TEXELS: usize = (PAGE * PAGE) as usize;
+
+/// Region summaries ([`REGION`] blocks) of one page.
+const PAGE_REGIONS: usize = ((PAGE / REGION) * (PAGE / REGION)) as usize;
+
+/// Finest level of a paged map ([`LightMap::build_pages`]): level `k` has `PAGE << k` texels
+/// per face side, so the finest is `2^22`.
+///
+/// Why `2^22`: face coordinates are computed in `f32` (a relative error of `2^-24`), which at
+/// `2^22` texels per side is a sixteenth of a texel on the face's rim; a finer grid would place
+/// points by their rounding. It is also what a light a thousand scene sizes away needs for
+/// receivers seen at one texel per pixel (the resolution guide in [`crate::paged`]).
+pub const MAX_LEVEL: u8 = 16;
+
+/// Id returned by texel lookups in a page that was not drawn: the map cannot tell, so the
+/// classifier leaves the point to a ray. Distinct from every triangle id a map draws (ids from
+/// `ABSENT` on are not drawn).
+pub const ABSENT: u32 = EMPTY - 2;
+
+/// One page of a map: which level, face and page of it.
+///
+/// Pages order by level, then face, then row, then column: the order [`LightMap::build_pages`]
+/// stores them in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct PageKey {
+    pub level: u8,
+    pub face: u8,
+    /// Page row (texel rows `py * PAGE ..`).
+    pub py: u32,
+    /// Page column (texel columns `px * PAGE ..`).
+    pub px: u32,
+}
+
+/// Page tables with at most this many entries are dense arrays; larger ones (the fine levels
+/// of paged maps, where a frame draws a few pages of millions) are hash maps.
+const DENSE_PAGES: usize = 1 << 12;
+
+/// No page in a dense page table.
+const NO_PAGE: u32 = u32::MAX;
+
+/// One face's texels at one level: the pages drawn, each [`PAGE`] texels square (empty when
+/// none was drawn).
 #[derive(Clone, Debug, Default)]
 struct Face {
+    /// Pages per side.
+    n: u32,
+    /// Page `py * n + px` to its slot in the arrays below, for small faces ([`DENSE_PAGES`]).
+    dense: Vec<u32>,
+    /// The same for large faces.
+    sparse: rustc_hash::FxHashMap<u32, u32>,
+    /// Per slot, [`PAGE_TEXELS`] ids in [`BLOCK`] order ([`texel_index`]).
     id: Vec<u32>,
     dist: Vec<f32>,
-    /// Per [`REGION`]-square block of texels, row-major: the one triangle its texels see
-    /// ([`EMPTY`] if none), or [`MIXED`] (see [`LightMap::region_id`]).
+    /// Per slot, [`PAGE_REGIONS`] [`REGION`]-square blocks, row-major: the one triangle its
+    /// texels see ([`EMPTY`] if none), or [`MIXED`] (see [`LightMap::region_id`]).
     region: Vec<u32>,
     /// The same by group of triangles ([`LightMap::build_grouped`]; empty without groups).
     region_group: Vec<u32>,
+}
+
+impl Face {
+    /// An empty face of `res` texels per side.
+    fn new(res: u32) -> Self {
+        let n = res.div_ceil(PAGE);
+        let pages = n as usize * n as usize;
+        Face { n, dense: if pages <= DENSE_PAGES { vec![NO_PAGE; pages] } else { Vec::new() }, ..Face::default() }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.id.is_empty()
+    }
+
+    fn pages(&self) -> usize {
+        self.id.len() / PAGE_TEXELS
+    }
+
+    /// The slot of page `(px, py)` (both below `n`), if it was drawn.
+    #[inline]
+    fn slot(&self, px: u32, py: u32) -> Option<usize> {
+        let k = py * self.n + px;
+        if self.dense.is_empty() {
+            self.sparse.get(&k).map(|&s| s as usize)
+        } else {
+            let s = self.dense[k as usize];
+            (s != NO_PAGE).then_some(s as usize)
+        }
+    }
+
+    /// Appends a page's slot for page `(px, py)`; its texels are pushed by the caller.
+    fn insert(&mut self, px: u32, py: u32) -> usize {
+        let s = self.pages();
+        let k = py * self.n + px;
+        if self.dense.is_empty() {
+            self.sparse.insert(k, s as u32);
+        } else {
+            self.dense[k as usize] = s as u32;
+        }
+        s
+    }
+
+    /// Where texel `(x, y)` is stored, if its page was drawn.
+    #[inline]
+    fn index(&self, x: u32, y: u32) -> Option<usize> {
+        let s = self.slot(x / PAGE, y / PAGE)?;
+        Some(s * PAGE_TEXELS + texel_index(PAGE, x % PAGE, y % PAGE))
+    }
+
+    /// The pages drawn, by `(px, py)`.
+    fn keys(&self) -> Vec<(u32, u32)> {
+        let mut k: Vec<(u32, u32, u32)> = if self.dense.is_empty() {
+            self.sparse.iter().map(|(&k, &s)| (s, k % self.n, k / self.n)).collect()
+        } else {
+            self.dense
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| **s != NO_PAGE)
+                .map(|(k, &s)| (s, k as u32 % self.n, k as u32 / self.n))
+                .collect()
+        };
+        k.sort_unstable();
+        k.into_iter().map(|(_, x, y)| (x, y)).collect()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        if self.is_empty() {
+            return 0;
+        }
+        (self.id.len() + self.dist.len() + self.region.len() + self.region_group.len() + self.dense.len()) * 4
+            + self.sparse.len() * 8
+    }
 }
 
 /// Side of the texel blocks that [`LightMap::region_id`] summarises.
@@ -241,40 +376,38 @@ fn advise_huge<T>(v: &Vec<T>) {
     let _ = v;
 }
 
-/// The region summaries of a face's ids in [`BLOCK`] order, in one pass: by triangle
-/// ([`Face::region`]) and by `groups[id]` ([`Face::region_group`], empty if `groups` is).
-fn summarise(ids: &[u32], res: u32, groups: &[u32]) -> (Vec<u32>, Vec<u32>) {
-    if ids.is_empty() {
-        return (Vec::new(), Vec::new());
-    }
-    let blocks = res.div_ceil(REGION) as usize;
+/// The region summaries of one page's ids ([`BLOCK`] order), appended to `by_id` and (if
+/// `groups` is not empty) `by_group`: by triangle ([`Face::region`]) and by `groups[id]`
+/// ([`Face::region_group`]).
+fn summarise(ids: &[u32], groups: &[u32], by_id: &mut Vec<u32>, by_group: &mut Vec<u32>) {
     let per = (REGION / BLOCK) as usize;
-    let blocks_x = res.div_ceil(BLOCK) as usize;
+    let blocks_x = (PAGE / BLOCK) as usize;
     let cell = (BLOCK * BLOCK) as usize;
+    let side = (PAGE / REGION) as usize;
     // One id seen, EMPTY, or MIXED once a second one shows up.
     let see = |v: &mut u32, id: u32| {
         if id != EMPTY && id != *v {
             *v = if *v == EMPTY { id } else { MIXED };
         }
     };
-    let mut both = vec![[EMPTY; 2]; blocks * blocks];
-    both.par_chunks_mut(blocks).enumerate().for_each(|(ry, row)| {
-        for (rx, [v, g]) in row.iter_mut().enumerate() {
-            for by in ry * per..((ry + 1) * per).min(blocks_x) {
+    for ry in 0..side {
+        for rx in 0..side {
+            let (mut v, mut g) = (EMPTY, EMPTY);
+            for by in ry * per..(ry + 1) * per {
                 let first = (by * blocks_x + rx * per) * cell;
-                let last = (by * blocks_x + ((rx + 1) * per).min(blocks_x)) * cell;
-                for &id in &ids[first..last] {
-                    see(v, id);
+                for &id in &ids[first..first + per * cell] {
+                    see(&mut v, id);
                     if !groups.is_empty() {
-                        see(g, groups.get(id as usize).copied().unwrap_or(id));
+                        see(&mut g, groups.get(id as usize).copied().unwrap_or(id));
                     }
                 }
             }
+            by_id.push(v);
+            if !groups.is_empty() {
+                by_group.push(g);
+            }
         }
-    });
-    let by_id = both.iter().map(|b| b[0]).collect();
-    let by_group = if groups.is_empty() { Vec::new() } else { both.iter().map(|b| b[1]).collect() };
-    (by_id, by_group)
+    }
 }
 
 /// Side of the square blocks texels are stored in: 4x4 ids are one 64-byte cache line.
@@ -294,19 +427,36 @@ fn texel_index(res: u32, x: u32, y: u32) -> usize {
     (by * blocks_x + bx) * (BLOCK * BLOCK) as usize + ((y % BLOCK) * BLOCK + x % BLOCK) as usize
 }
 
-/// A light's depth map: 6 cube faces or 2 paraboloid hemispheres (or 1 hemisphere, for VPLs).
+/// A light's depth map: 6 cube faces or 2 paraboloid hemispheres (or 1 hemisphere, for VPLs),
+/// stored in pages ([`PAGE`]), at one level (whole maps) or several (paged maps).
 #[derive(Clone, Debug)]
 pub struct LightMap {
     layout: Layout,
-    resolution: u32,
+    /// Texels per face side at level 0; level `k` has `base << k`.
+    base: u32,
     light: Vec3,
     near: f32,
+    /// Per face, whether any page of it was drawn (at any level).
     drawn: Vec<bool>,
+    /// Per level and face (`level * face_count + face`), the pages drawn.
     faces: Vec<Face>,
     triangles_drawn: u64,
     /// Faces rasterized over the map's life, merges included ([`LightMap::faces_rasterized`]).
     faces_rasterized: u32,
+    /// Pages rasterized over the map's life (a whole face counts its pages).
+    pages_rasterized: u64,
+    /// Made by [`LightMap::build_pages`].
+    paged: bool,
 }
+
+/// The rasterizer's options for light maps: reversed-Z, ids only, no culling, the tracer's tie.
+const MAP_RASTER: RasterOptions = RasterOptions {
+    reversed_z: true,
+    barycentrics: false,
+    cull_backfaces: false,
+    depth_tie: DEPTH_TIE,
+    ..RasterOptions::DEFAULT
+};
 
 impl LightMap {
     /// Number of faces of a point-light map of this kind (6 or 2).
@@ -370,6 +520,22 @@ impl LightMap {
         Self::build_layout(tris, origin, opts, Layout::Hemisphere(frame), &[true], &[])
     }
 
+    /// A map with nothing drawn yet.
+    fn empty(layout: Layout, base: u32, light: Vec3, near: f32, paged: bool) -> Self {
+        LightMap {
+            layout,
+            base,
+            light,
+            near,
+            drawn: vec![false; layout.face_count()],
+            faces: (0..layout.face_count()).map(|_| Face::new(base)).collect(),
+            triangles_drawn: 0,
+            faces_rasterized: 0,
+            pages_rasterized: 0,
+            paged,
+        }
+    }
+
     fn build_layout(
         tris: &[[Vec3; 3]],
         light: Vec3,
@@ -383,41 +549,23 @@ impl LightMap {
         let drawn: Vec<bool> = (0..count).map(|i| faces.get(i).copied().unwrap_or(false)).collect();
         let (valid, near) =
             if drawn.iter().any(|&d| d) { usable_triangles(tris, light, layout) } else { (Vec::new(), 1.0) };
-        let mut map = LightMap {
-            layout,
-            resolution,
-            light,
-            near,
-            drawn,
-            faces: Vec::with_capacity(count),
-            triangles_drawn: 0,
-            faces_rasterized: 0,
-        };
-
-        let ropts = RasterOptions {
-            reversed_z: true,
-            barycentrics: false,
-            cull_backfaces: false,
-            depth_tie: DEPTH_TIE,
-            ..RasterOptions::default()
-        };
+        let mut map = Self::empty(layout, resolution, light, near, false);
         let mut rasterizer = Rasterizer::new();
         let texels = resolution as usize * resolution as usize;
         let mut target = Target {
-            depth: reserved_huge(if map.drawn.iter().any(|&d| d) { texels } else { 0 }),
-            id: reserved_huge(if map.drawn.iter().any(|&d| d) { texels } else { 0 }),
+            depth: reserved_huge(if drawn.iter().any(|&d| d) { texels } else { 0 }),
+            id: reserved_huge(if drawn.iter().any(|&d| d) { texels } else { 0 }),
             ..Target::default()
         };
         let mut cube = if layout == Layout::Cube {
-            cube_triangles(tris, &valid, light, near, &map.drawn)
+            cube_triangles(tris, &valid, light, near, &drawn)
         } else {
             vec![]
         }
         .into_iter();
-        for f in 0..count {
+        for (f, &draw) in drawn.iter().enumerate() {
             let cube_face = cube.next();
-            if !map.drawn[f] {
-                map.faces.push(Face::default());
+            if !draw {
                 continue;
             }
             let (clip, ids) = match layout {
@@ -429,92 +577,164 @@ impl LightMap {
             };
             map.triangles_drawn += clip.len() as u64;
             map.faces_rasterized += 1;
-            rasterizer.rasterize_into(&clip, &ids, resolution, resolution, &ropts, &mut target);
+            rasterizer.rasterize_into(&clip, &ids, resolution, resolution, &MAP_RASTER, &mut target);
             // The target's buffers stay with it for the next face.
-            let face = map.finish_face(&target.id, &target.depth, groups);
-            map.faces.push(face);
+            map.store_face(f, &target.id, &target.depth, groups);
         }
         map
     }
 
-    /// The stored face of the rasterizer's row-major ids and reversed-Z depths, in one pass:
-    /// depths turned into distances, the texels outside a paraboloid's disc cleared, both
-    /// stored in [`BLOCK`] order (padded with [`EMPTY`] and infinity); then the region summary
-    /// ([`Face::region`]). One pass, not one per step: each of them read and wrote the whole
-    /// face, and fresh buffers for each cost page faults of their own.
+    /// Draws the pages `pages` (at most [`MAX_LEVEL`]; duplicates are drawn once) of the cube
+    /// map of the point light at `light`: a paged map, whose level `k` has `PAGE << k` texels
+    /// per face side and holds only the pages asked for. Each page is drawn as its own small
+    /// target through a projection that maps the page's square of the face to the whole
+    /// target (see `page_clip`), so the virtual resolution is not bounded by the rasterizer's
+    /// target size. `opts.resolution` is ignored; `opts.kind` must be [`MapKind::Cube`] (a
+    /// paraboloid's tessellation would have to follow the page's resolution: see the crate's
+    /// `paged` docs). Otherwise as [`LightMap::build_grouped`].
     ///
-    /// In `f32` (so that it vectorises): `near / depth` and the square root are correctly
-    /// rounded, a few ulps in all (`~3e-7` relative) on top of the depth's own rounding.
-    fn finish_face(&self, ids: &[u32], depth: &[f32], groups: &[u32]) -> Face {
-        let res = self.resolution as usize;
-        let b = BLOCK as usize;
-        let blocks_x = res.div_ceil(b);
-        let near = self.near;
-        let inv = 2.0 / self.resolution as f32;
-        // Squared face coordinate of texel centre i (the same for rows: t = -s).
-        let sq: Vec<f32> = (0..res).map(|i| ((i as f32 + 0.5) * inv - 1.0).powi(2)).collect();
-        let cube = self.layout == Layout::Cube;
-        let res32 = self.resolution;
-        // Zeroed allocations are mapped lazily (and not advised huge: `advise_huge`): every
-        // element is written below, once.
-        let n = blocks_x * blocks_x * b * b;
-        let (mut id, mut dist) = (vec![0u32; n], vec![0f32; n]);
-        let band = blocks_x * b * b;
-        id.par_chunks_mut(band).zip(dist.par_chunks_mut(band)).enumerate().for_each(
-            |(by, (id_out, dist_out))| {
-                for dy in 0..b {
-                    let y = by * b + dy;
-                    let (x0, x1) = if y >= res {
-                        (0, 0)
-                    } else if cube {
-                        (0, res32)
-                    } else {
-                        disc_span(res32, y as u32)
-                    };
-                    for x in 0..blocks_x * b {
-                        let k = (x / b) * b * b + dy * b + x % b;
-                        let inside = (x0..x1).contains(&(x as u32));
-                        let d = if inside { depth[y * res + x] } else { 0.0 };
-                        // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
-                        (id_out[k], dist_out[k]) = if d > 0.0 {
-                            // Cube: w = near / depth along the axis; the centre's direction
-                            // (1, s, t) is sqrt(1 + s^2 + t^2) times longer than its axis
-                            // component.
-                            let r = if cube { near / d * ((1.0 + sq[y]) + sq[x]).sqrt() } else { near / d };
-                            (ids[y * res + x], r)
-                        } else {
-                            (EMPTY, f32::INFINITY)
-                        };
-                    }
-                }
-            },
-        );
-        let (region, region_group) = summarise(&id, self.resolution, groups);
-        Face { id, dist, region, region_group }
+    /// # Panics
+    /// If `opts.kind` is not [`MapKind::Cube`].
+    pub fn build_pages(
+        tris: &[[Vec3; 3]],
+        light: Vec3,
+        opts: &MapOptions,
+        pages: &[PageKey],
+        groups: &[u32],
+    ) -> Self {
+        assert_eq!(opts.kind, MapKind::Cube, "paged maps are cube maps");
+        let mut pages: Vec<PageKey> = pages
+            .iter()
+            .copied()
+            .filter(|k| k.level <= MAX_LEVEL && usize::from(k.face) < 6 && {
+                let n = PAGE << k.level;
+                k.px < n / PAGE && k.py < n / PAGE
+            })
+            .collect();
+        pages.sort_unstable();
+        pages.dedup();
+        let mut faces = [false; 6];
+        pages.iter().for_each(|k| faces[usize::from(k.face)] = true);
+        let (valid, near) =
+            if pages.is_empty() { (Vec::new(), 1.0) } else { usable_triangles(tris, light, Layout::Cube) };
+        let mut map = Self::empty(Layout::Cube, PAGE, light, near, true);
+        if pages.is_empty() {
+            return map;
+        }
+        let clip = cube_triangles(tris, &valid, light, near, &faces);
+        // Per page, the triangles of its face whose image may reach it.
+        let bins = bin_pages(&clip, &pages);
+        let l = light.as_dvec3();
+        let drawn: Vec<(Vec<u32>, Vec<f32>, u64)> = pages
+            .par_iter()
+            .zip(&bins)
+            .map_init(
+                || (Rasterizer::new(), Target::default(), Vec::new()),
+                |(rasterizer, target, tris_out), (key, bin)| {
+                    let (axis, sign, s, t) = CubeFace::ALL[usize::from(key.face)].axes();
+                    tris_out.clear();
+                    tris_out.extend(bin.iter().map(|&id| page_clip(tris[id as usize], l, near, key, (axis, sign, s, t))));
+                    rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &MAP_RASTER, target);
+                    let (mut id, mut dist) = (vec![0u32; PAGE_TEXELS], vec![0f32; PAGE_TEXELS]);
+                    let res = PAGE << key.level;
+                    let origin = (key.px * PAGE, key.py * PAGE);
+                    finish_page(Layout::Cube, near, res, origin, (&target.id, &target.depth, PAGE as usize, (0, 0)), &mut id, &mut dist);
+                    (id, dist, bin.len() as u64)
+                },
+            )
+            .collect();
+        let levels = usize::from(pages.last().map_or(0, |k| k.level)) + 1;
+        for lv in 1..levels {
+            for _ in 0..6 {
+                map.faces.push(Face::new(PAGE << lv));
+            }
+        }
+        for (key, (id, dist, tris)) in pages.iter().zip(drawn) {
+            map.add_page(*key, &id, &dist, groups);
+            map.triangles_drawn += tris;
+        }
+        map.faces_rasterized += faces.iter().filter(|&&f| f).count() as u32;
+        map
     }
 
-    /// Where direction `dir` (non-zero, from the light) falls.
+    /// Adds page `key` (not already drawn) with its texels in [`BLOCK`] order.
+    fn add_page(&mut self, key: PageKey, id: &[u32], dist: &[f32], groups: &[u32]) {
+        let nf = self.layout.face_count();
+        let face = &mut self.faces[usize::from(key.level) * nf + usize::from(key.face)];
+        face.insert(key.px, key.py);
+        face.id.extend_from_slice(id);
+        face.dist.extend_from_slice(dist);
+        summarise(id, groups, &mut face.region, &mut face.region_group);
+        self.drawn[usize::from(key.face)] = true;
+        self.pages_rasterized += 1;
+    }
+
+    /// Stores a whole face from the rasterizer's row-major ids and reversed-Z depths: every
+    /// page of it, in row-major page order ([`finish_page`] for each, in parallel), then the
+    /// region summaries.
+    fn store_face(&mut self, f: usize, ids: &[u32], depth: &[f32], groups: &[u32]) {
+        let res = self.base;
+        let n = res.div_ceil(PAGE);
+        let (layout, near) = (self.layout, self.near);
+        let pages = n as usize * n as usize;
+        // Zeroed allocations are mapped lazily (and not advised huge: `advise_huge`): every
+        // element is written below, once.
+        let (mut id, mut dist) = (vec![0u32; pages * PAGE_TEXELS], vec![0f32; pages * PAGE_TEXELS]);
+        id.par_chunks_mut(PAGE_TEXELS).zip(dist.par_chunks_mut(PAGE_TEXELS)).enumerate().for_each(
+            |(k, (id, dist))| {
+                let origin = ((k as u32 % n) * PAGE, (k as u32 / n) * PAGE);
+                finish_page(layout, near, res, origin, (ids, depth, res as usize, origin), id, dist);
+            },
+        );
+        let mut face = Face::new(res);
+        let side = PAGE_REGIONS * pages;
+        face.region.reserve(side);
+        let regions: Vec<(Vec<u32>, Vec<u32>)> = id
+            .par_chunks(PAGE_TEXELS)
+            .map(|page| {
+                let (mut a, mut b) = (Vec::with_capacity(PAGE_REGIONS), Vec::new());
+                summarise(page, groups, &mut a, &mut b);
+                (a, b)
+            })
+            .collect();
+        for (a, b) in regions {
+            face.region.extend(a);
+            face.region_group.extend(b);
+        }
+        // Slots in row-major page order: page k in slot k.
+        for k in 0..pages as u32 {
+            if face.dense.is_empty() {
+                face.sparse.insert(k, k);
+            } else {
+                face.dense[k as usize] = k;
+            }
+        }
+        face.id = id;
+        face.dist = dist;
+        self.faces[f] = face;
+        self.drawn[f] = true;
+        self.pages_rasterized += pages as u64;
+    }
+
+    /// Where direction `dir` (non-zero, from the light) falls, at level 0 ([`LightMap::coord_at`]).
+    #[inline]
+    pub fn coord(&self, dir: Vec3) -> MapCoord {
+        self.coord_at(dir, 0)
+    }
+
+    /// Where direction `dir` (non-zero, from the light) falls at level `level`.
     ///
     /// Coordinates are clamped into `[0, resolution)` (a direction on a cube edge or corner goes
     /// to the face [`cube_lookup`] picks, at its last texel), and for paraboloids into a texel
     /// whose centre is in the disc (module docs). NaN gives some in-range texel.
     #[inline]
-    pub fn coord(&self, dir: Vec3) -> MapCoord {
+    pub fn coord_at(&self, dir: Vec3, level: u8) -> MapCoord {
+        let res = self.resolution_at(level);
         if self.layout == Layout::Cube {
-            // In f32: classification calls this for every pixel and light, and the face
-            // coordinates are exact to an ulp either way (one division each).
-            let (face, st) = cube_lookup(dir);
-            let half = self.resolution as f32 * 0.5;
-            let lim = (self.resolution as f32).next_down();
-            let clamp = |v: f32| v.max(0.0).min(lim);
-            return MapCoord {
-                face: face.index(),
-                x: clamp((st.x + 1.0) * half),
-                y: clamp((1.0 - st.y) * half),
-            };
+            return cube_coord(dir, res, level);
         }
         let d = dir.as_dvec3();
-        let half = f64::from(self.resolution) * 0.5;
+        let half = f64::from(res) * 0.5;
         let face = match self.layout {
             Layout::Dual => Self::face_of(MapKind::Paraboloid, dir),
             _ => 0,
@@ -524,22 +744,18 @@ impl LightMap {
         let z = m.z.max(0.0);
         let w = (m.x * m.x + m.y * m.y + z * z).sqrt() + z;
         let (s, t) = (m.x / w, m.y / w);
-        let (x, y) = self.clamp_to_domain((s + 1.0) * half, (1.0 - t) * half);
-        MapCoord { face, x, y }
+        let (x, y) = self.clamp_to_domain(res, (s + 1.0) * half, (1.0 - t) * half);
+        MapCoord { face, level, x: f64::from(x), y: f64::from(y) }
     }
 
-    /// Continuous coordinates clamped into `[0, resolution)` and, for paraboloids, into a texel
+    /// Continuous coordinates clamped into `[0, res)` and, for paraboloids, into a texel
     /// of the domain: the nearest one (by distance to its square) if the point's own is not.
-    fn clamp_to_domain(&self, x: f64, y: f64) -> (f32, f32) {
-        let res = self.resolution;
+    fn clamp_to_domain(&self, res: u32, x: f64, y: f64) -> (f32, f32) {
         // The largest f32 below `res` (`res` is at most 2^16, exact in f32): `next_down`
         // without its special cases.
         let lim = f32::from_bits((res as f32).to_bits() - 1);
         // `max` before `min` and NaN -> 0: f32::max returns the non-NaN operand.
         let (x, y) = ((x as f32).max(0.0).min(lim), (y as f32).max(0.0).min(lim));
-        if self.layout == Layout::Cube {
-            return (x, y);
-        }
         let (ix, iy) = (x as u32, y as u32);
         if disc_contains(res, ix, iy) {
             return (x, y);
@@ -549,12 +765,19 @@ impl LightMap {
         (into(x, jx), into(y, jy))
     }
 
-    /// The unit direction (from the light) of the continuous texel position `(x, y)` on `face`.
+    /// The unit direction (from the light) of the continuous texel position `(x, y)` on `face`
+    /// at level 0 ([`LightMap::texel_dir_at`]).
     ///
     /// A face number out of range is taken as the last face.
     pub fn texel_dir(&self, face: u8, x: f32, y: f32) -> Vec3 {
-        let inv = 2.0 / f64::from(self.resolution);
-        let (s, t) = (f64::from(x) * inv - 1.0, 1.0 - f64::from(y) * inv);
+        self.texel_dir_at(face, 0, f64::from(x), f64::from(y))
+    }
+
+    /// The unit direction (from the light) of the continuous texel position `(x, y)` on `face`
+    /// at level `level`.
+    pub fn texel_dir_at(&self, face: u8, level: u8, x: f64, y: f64) -> Vec3 {
+        let inv = 2.0 / f64::from(self.resolution_at(level));
+        let (s, t) = (x * inv - 1.0, 1.0 - y * inv);
         let d = match self.layout {
             Layout::Cube => {
                 let (axis, sign, si, ti) = CubeFace::ALL[usize::from(face.min(5))].axes();
@@ -574,53 +797,105 @@ impl LightMap {
         d.normalize().as_vec3()
     }
 
-    /// The face index if valid, texel index within it.
+    /// The face at `level`, if the map has that level and face.
     #[inline]
-    fn texel(&self, face: u8, ix: u32, iy: u32) -> Option<(&Face, usize)> {
-        let res = self.resolution;
-        let f = self.faces.get(usize::from(face))?;
-        (ix < res && iy < res && !f.id.is_empty()).then(|| (f, texel_index(res, ix, iy)))
+    fn face_at(&self, level: u8, face: u8) -> Option<&Face> {
+        let nf = self.layout.face_count();
+        if usize::from(face) >= nf {
+            return None;
+        }
+        self.faces.get(usize::from(level) * nf + usize::from(face))
     }
 
-    /// The ids of `face` in storage order (texel `(ix, iy)` at [`LightMap::texel_index`]; empty
-    /// when the face was not drawn, or does not exist): for lookups in bulk.
+    /// The face and storage index of texel `(ix, iy)`: `Err(EMPTY)` outside the face or on a
+    /// face of a whole map that was not drawn, `Err(ABSENT)` in a page of a paged map that was
+    /// not drawn.
     #[inline]
-    pub fn face_ids(&self, face: u8) -> &[u32] {
-        self.faces.get(usize::from(face)).map_or(&[], |f| &f.id)
+    fn texel(&self, level: u8, face: u8, ix: u32, iy: u32) -> Result<(&Face, usize), u32> {
+        let res = self.resolution_at(level);
+        if ix >= res || iy >= res {
+            return Err(EMPTY);
+        }
+        let f = match self.face_at(level, face) {
+            Some(f) => f,
+            None if self.paged && usize::from(face) < self.layout.face_count() => return Err(ABSENT),
+            None => return Err(EMPTY),
+        };
+        match f.index(ix, iy) {
+            Some(i) => Ok((f, i)),
+            None if self.is_paged() => Err(ABSENT),
+            None => Err(EMPTY),
+        }
     }
 
-    /// The one triangle that the texels `[x0, x1] x [y0, y1]` of `face` see: `Some(EMPTY)` if
-    /// none, `Some(id)` if every texel holds `id` or nothing, `None` if two triangles or more
-    /// may be seen (the answer is conservative: it reads whole `REGION` blocks). A face that
-    /// was not drawn sees nothing, as its texel lookups say.
-    pub fn region_id(&self, face: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
-        let f = self.faces.get(usize::from(face))?;
-        if f.region.is_empty() {
+    /// Whether the map is paged ([`LightMap::build_pages`]): a page not drawn is then
+    /// [`ABSENT`], not empty.
+    #[inline]
+    pub fn is_paged(&self) -> bool {
+        self.paged
+    }
+
+    /// Id of the closest triangle at texel `(ix, iy)` of `face` at `level`: [`EMPTY`] if none
+    /// (or outside the face), [`ABSENT`] if the texel's page was not drawn in a paged map.
+    #[inline]
+    pub fn id_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> u32 {
+        match self.texel(level, face, ix, iy) {
+            Ok((f, i)) => f.id[i],
+            Err(e) => e,
+        }
+    }
+
+    /// Starts loading texel `(ix, iy)` into the cache. A hint only.
+    #[inline]
+    pub fn prefetch(&self, level: u8, face: u8, ix: u32, iy: u32) {
+        #[cfg(target_arch = "x86_64")]
+        if let Ok((f, i)) = self.texel(level, face, ix, iy) {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            // SAFETY: prefetching has no effect on memory or on the program's state; SSE is
+            // part of x86-64.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>((&f.id[i] as *const u32).cast()) };
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (level, face, ix, iy);
+    }
+
+    /// The one triangle that the texels `[x0, x1] x [y0, y1]` of `face` at `level` see:
+    /// `Some(EMPTY)` if none, `Some(id)` if every texel holds `id` or nothing, `None` if two
+    /// triangles or more may be seen, or a page of the box was not drawn (the answer is
+    /// conservative: it reads whole `REGION` blocks). A face of a whole map that was not drawn
+    /// sees nothing, as its texel lookups say.
+    pub fn region_id(&self, face: u8, level: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
+        let f = self.face_at(level, face)?;
+        if f.is_empty() && !self.is_paged() {
             return Some(EMPTY);
         }
-        self.region_in(&f.region, x0, y0, x1, y1)
+        self.region_in(f, level, false, x0, y0, x1, y1)
     }
 
     /// [`LightMap::region_id`] by group of triangles (`Some(g)`: every texel holds a triangle
     /// of group `g`, or nothing), for a map made by [`LightMap::build_grouped`]; `None`
     /// (cannot tell) for one made without groups.
-    pub fn region_group(&self, face: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
-        let f = self.faces.get(usize::from(face))?;
-        if f.region.is_empty() {
+    pub fn region_group(&self, face: u8, level: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
+        let f = self.face_at(level, face)?;
+        if f.is_empty() && !self.is_paged() {
             return Some(EMPTY);
         }
         if f.region_group.is_empty() {
             return None;
         }
-        self.region_in(&f.region_group, x0, y0, x1, y1)
+        self.region_in(f, level, true, x0, y0, x1, y1)
     }
 
-    fn region_in(&self, region: &[u32], x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
-        let blocks = self.resolution.div_ceil(REGION) as usize;
-        let (bx0, bx1) = ((x0 / REGION) as usize, (x1.min(self.resolution - 1) / REGION) as usize);
+    #[allow(clippy::too_many_arguments)]
+    fn region_in(&self, f: &Face, level: u8, group: bool, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
+        let last = self.resolution_at(level) - 1;
+        let side = PAGE / REGION;
+        let region = if group { &f.region_group } else { &f.region };
         let mut seen = EMPTY;
-        for by in (y0 / REGION) as usize..=(y1.min(self.resolution - 1) / REGION) as usize {
-            for &v in &region[by * blocks + bx0..=by * blocks + bx1] {
+        for by in y0 / REGION..=y1.min(last) / REGION {
+            for bx in x0 / REGION..=x1.min(last) / REGION {
+                let slot = f.slot(bx / side, by / side)?;
+                let v = region[slot * PAGE_REGIONS + ((by % side) * side + bx % side) as usize];
                 if v == MIXED || (v != EMPTY && seen != EMPTY && v != seen) {
                     return None;
                 }
@@ -632,23 +907,24 @@ impl LightMap {
         Some(seen)
     }
 
-    /// Where texel `(ix, iy)` (both below the resolution) is stored in [`LightMap::face_ids`].
-    #[inline]
-    pub fn texel_index(&self, ix: u32, iy: u32) -> usize {
-        texel_index(self.resolution, ix, iy)
-    }
-
-    /// Id of the closest triangle at texel `(ix, iy)` of `face`, or [`EMPTY`].
+    /// Id of the closest triangle at texel `(ix, iy)` of `face` at level 0, or [`EMPTY`]
+    /// ([`LightMap::id_at`]).
     #[inline]
     pub fn id(&self, face: u8, ix: u32, iy: u32) -> u32 {
-        self.texel(face, ix, iy).map_or(EMPTY, |(f, i)| f.id[i])
+        self.id_at(0, face, ix, iy)
     }
 
     /// Distance from the light to the stored surface in the direction of the texel's centre
-    /// (`f32::INFINITY` when empty).
+    /// at level 0 (`f32::INFINITY` when empty or not drawn).
     #[inline]
     pub fn depth(&self, face: u8, ix: u32, iy: u32) -> f32 {
-        self.texel(face, ix, iy).map_or(f32::INFINITY, |(f, i)| f.dist[i])
+        self.depth_at(0, face, ix, iy)
+    }
+
+    /// [`LightMap::depth`] at `level`.
+    #[inline]
+    pub fn depth_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> f32 {
+        self.texel(level, face, ix, iy).map_or(f32::INFINITY, |(f, i)| f.dist[i])
     }
 
     /// Angle in radians subtended by one texel at `c` (the largest of its two sides): the
@@ -661,8 +937,8 @@ impl LightMap {
     /// at the rim.
     #[inline]
     pub fn texel_angle(&self, c: MapCoord) -> f32 {
-        let inv = 2.0 / f64::from(self.resolution);
-        let (s, t) = (f64::from(c.x) * inv - 1.0, 1.0 - f64::from(c.y) * inv);
+        let inv = 2.0 / f64::from(self.resolution_at(c.level));
+        let (s, t) = (c.x * inv - 1.0, 1.0 - c.y * inv);
         let (s2, t2) = (s * s, t * t);
         let per_unit = match self.layout {
             Layout::Cube => (1.0 + s2.max(t2)).sqrt() / (1.0 + s2 + t2),
@@ -671,12 +947,12 @@ impl LightMap {
         (per_unit * inv) as f32
     }
 
-    /// Whether a texel centre lies in the region the face covers (always for cube faces; inside
-    /// the unit disc for paraboloids; texels outside it are never drawn).
+    /// Whether a texel centre at level 0 lies in the region the face covers (always for cube
+    /// faces; inside the unit disc for paraboloids; texels outside it are never drawn).
     #[inline]
     pub fn texel_in_domain(&self, face: u8, ix: u32, iy: u32) -> bool {
-        let res = self.resolution;
-        usize::from(face) < self.faces.len()
+        let res = self.base;
+        usize::from(face) < self.layout.face_count()
             && ix < res
             && iy < res
             && (self.layout == Layout::Cube || disc_contains(res, ix, iy))
@@ -690,10 +966,22 @@ impl LightMap {
         }
     }
 
-    /// Texels per side of every face (the requested resolution clamped to `[1, MAX_TARGET_DIM]`).
+    /// Texels per side of every face at level 0 (for a whole map, its only level: the
+    /// requested resolution clamped to `[1, MAX_TARGET_DIM]`; for a paged map, [`PAGE`]).
     #[inline]
     pub fn resolution(&self) -> u32 {
-        self.resolution
+        self.base
+    }
+
+    /// Texels per side of every face at `level`: `resolution() << level`.
+    #[inline]
+    pub fn resolution_at(&self, level: u8) -> u32 {
+        self.base << level.min(MAX_LEVEL)
+    }
+
+    /// Levels the map has (1 for a whole map).
+    pub fn levels(&self) -> u8 {
+        (self.faces.len() / self.layout.face_count()) as u8
     }
 
     #[inline]
@@ -709,57 +997,134 @@ impl LightMap {
 
     /// Number of faces of this map (6, 2, or 1 for [`LightMap::build_hemisphere`]).
     pub fn faces(&self) -> usize {
-        self.faces.len()
+        self.layout.face_count()
     }
 
-    /// Which faces were drawn.
+    /// Which faces were drawn (any page of them, at any level).
     pub fn faces_drawn(&self) -> &[bool] {
         &self.drawn
     }
 
-    /// Triangles rasterized, after culling per face and tessellation (summed over faces).
+    /// Whether page `key` was drawn.
+    pub fn has_page(&self, key: PageKey) -> bool {
+        self.face_at(key.level, key.face).is_some_and(|f| key.px < f.n && key.py < f.n && f.slot(key.px, key.py).is_some())
+    }
+
+    /// The pages drawn, in [`PageKey`] order.
+    pub fn pages(&self) -> Vec<PageKey> {
+        let nf = self.layout.face_count();
+        let mut out = Vec::new();
+        for (i, f) in self.faces.iter().enumerate() {
+            let (level, face) = ((i / nf) as u8, (i % nf) as u8);
+            out.extend(f.keys().into_iter().map(|(px, py)| PageKey { level, face, py, px }));
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Number of pages drawn (held now).
+    pub fn page_count(&self) -> usize {
+        self.faces.iter().map(Face::pages).sum()
+    }
+
+    /// Triangles rasterized, after culling per face (per page, for paged maps) and
+    /// tessellation, summed.
     pub fn triangles_drawn(&self) -> u64 {
         self.triangles_drawn
     }
 
     /// Faces rasterized to make this map, [`LightMap::merge`]s included: equal to the number of
-    /// faces drawn when no face was ever drawn twice.
+    /// faces drawn when no face was ever drawn twice. (A paged map counts the faces of each
+    /// build that drew pages on them.)
     pub fn faces_rasterized(&self) -> u32 {
         self.faces_rasterized
     }
 
-    /// Takes the faces `other` drew and `self` did not, so that a map can gain faces (a camera
-    /// that moved and sees more of the light's surroundings) without drawing its faces again.
-    /// A face is the same whichever other faces a build draws (the near distance depends on
-    /// the triangles and the light alone), so the result equals one build of all the faces.
+    /// Pages rasterized to make this map, merges included (a whole face counts all its pages).
+    pub fn pages_rasterized(&self) -> u64 {
+        self.pages_rasterized
+    }
+
+    /// Takes the faces (for whole maps) or pages (for paged maps) that `other` drew and `self`
+    /// did not, so that a map can gain them (a camera that moved and sees more of the light's
+    /// surroundings) without drawing its own again. A face or page is the same whichever
+    /// others a build draws (the near distance depends on the triangles and the light alone),
+    /// so the result equals one build of all of them.
     ///
     /// # Panics
     /// If `other` is not a map of the same light, layout and resolution.
     pub fn merge(&mut self, other: LightMap) {
         assert!(
-            self.layout == other.layout && self.resolution == other.resolution && self.light == other.light,
+            self.layout == other.layout
+                && self.base == other.base
+                && self.light == other.light
+                && self.paged == other.paged,
             "merging maps of different lights or parameterisations"
         );
         if !self.drawn.iter().any(|&d| d) {
             self.near = other.near;
         }
-        let used = other.drawn.iter().filter(|&&d| d).count() as u32;
-        for (f, face) in other.faces.into_iter().enumerate() {
-            if other.drawn[f] && !self.drawn[f] {
-                self.faces[f] = face;
-                self.drawn[f] = true;
-            }
-        }
+        let nf = self.layout.face_count();
         self.triangles_drawn += other.triangles_drawn;
-        self.faces_rasterized += used;
+        self.faces_rasterized += other.faces_rasterized;
+        if !self.paged {
+            for (f, face) in other.faces.into_iter().enumerate() {
+                if other.drawn[f] && !self.drawn[f] {
+                    self.pages_rasterized += face.pages() as u64;
+                    self.faces[f] = face;
+                    self.drawn[f] = true;
+                }
+            }
+            return;
+        }
+        let groups = !other.faces.iter().all(|f| f.region_group.is_empty());
+        while self.faces.len() < other.faces.len() {
+            let level = (self.faces.len() / nf) as u32;
+            self.faces.push(Face::new(self.base << level));
+        }
+        for key in other.pages() {
+            if self.has_page(key) {
+                continue;
+            }
+            let f = &other.faces[usize::from(key.level) * nf + usize::from(key.face)];
+            let s = f.slot(key.px, key.py).expect("listed page");
+            let (id, dist) = (&f.id[s * PAGE_TEXELS..][..PAGE_TEXELS], &f.dist[s * PAGE_TEXELS..][..PAGE_TEXELS]);
+            let face = &mut self.faces[usize::from(key.level) * nf + usize::from(key.face)];
+            face.insert(key.px, key.py);
+            face.id.extend_from_slice(id);
+            face.dist.extend_from_slice(dist);
+            face.region.extend_from_slice(&f.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
+            if groups {
+                face.region_group.extend_from_slice(&f.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
+            }
+            self.drawn[usize::from(key.face)] = true;
+            self.pages_rasterized += 1;
+        }
     }
 
-    /// Bytes of texel memory.
+    /// Bytes of texel memory (ids, distances, region summaries and page tables).
     pub fn memory_bytes(&self) -> usize {
-        self.faces
-            .iter()
-            .map(|f| (f.id.len() + f.dist.len() + f.region.len() + f.region_group.len()) * 4)
-            .sum()
+        self.faces.iter().map(Face::memory_bytes).sum()
+    }
+}
+
+/// Where direction `dir` falls on a cube map of `res` texels per side, at `level`.
+///
+/// Face coordinates in f32: classification calls this for every pixel and light, and they are
+/// exact to an ulp either way (one division each). Texel coordinates in f64: `(s + 1) res / 2`
+/// is then exact (a power of two times a sum of two f32).
+#[inline]
+pub(crate) fn cube_coord(dir: Vec3, res: u32, level: u8) -> MapCoord {
+    let (face, st) = cube_lookup(dir);
+    let half = f64::from(res) * 0.5;
+    let lim = f64::from(res).next_down();
+    // `max` before `min` and NaN -> 0: f64::max returns the non-NaN operand.
+    let clamp = |v: f64| v.max(0.0).min(lim);
+    MapCoord {
+        face: face.index(),
+        level,
+        x: clamp((f64::from(st.x) + 1.0) * half),
+        y: clamp((1.0 - f64::from(st.y)) * half),
     }
 }
 
@@ -875,6 +1240,166 @@ fn usable(t: &[Vec3; 3], l: DVec3) -> Option<f64> {
     let rel = 2f64.powi(-20);
     let edge_on_rel = |h: f64| h > near_vertex * rel || h > dist_triangle(d[0], d[1], d[2]) * rel;
     (h > edge_on_abs && edge_on_rel(h)).then_some(far)
+}
+
+/// One page's stored texels from the rasterizer's row-major ids and reversed-Z depths, `src` =
+/// `(ids, depths, row stride, position of the page's first texel in them)`: depths turned into
+/// distances, texels outside a paraboloid's disc or beyond the face cleared, both in
+/// [`BLOCK`] order (padded with [`EMPTY`] and infinity). `origin` is the page's first texel on
+/// a face of `res` texels per side.
+///
+/// In `f32` (so that it vectorises): `near / depth` and the square root are correctly rounded,
+/// a few ulps in all (`~3e-7` relative) on top of the depth's own rounding; the texel centres'
+/// face coordinates come from `f64`, exact at any level.
+fn finish_page(
+    layout: Layout,
+    near: f32,
+    res: u32,
+    origin: (u32, u32),
+    src: (&[u32], &[f32], usize, (u32, u32)),
+    id_out: &mut [u32],
+    dist_out: &mut [f32],
+) {
+    let (ids, depth, stride, (sx, sy)) = src;
+    let b = BLOCK as usize;
+    let p = PAGE as usize;
+    let inv = 2.0 / f64::from(res);
+    let cube = layout == Layout::Cube;
+    // Squared face coordinate of the page's texel centres (the same for rows: t = -s).
+    let sq = |o: u32| -> [f32; PAGE as usize] {
+        std::array::from_fn(|i| ((f64::from(o + i as u32) + 0.5) * inv - 1.0).powi(2) as f32)
+    };
+    let (sqx, sqy) = (sq(origin.0), sq(origin.1));
+    for y in 0..p {
+        let gy = origin.1 + y as u32;
+        let (x0, x1) = if gy >= res {
+            (0, 0)
+        } else if cube {
+            (0, res)
+        } else {
+            disc_span(res, gy)
+        };
+        for x in 0..p {
+            let gx = origin.0 + x as u32;
+            let k = ((y / b) * (p / b) + x / b) * b * b + (y % b) * b + x % b;
+            let inside = (x0..x1).contains(&gx);
+            let at = (sy as usize + y) * stride + sx as usize + x;
+            let d = if inside { depth[at] } else { 0.0 };
+            // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
+            (id_out[k], dist_out[k]) = if d > 0.0 {
+                // Cube: w = near / depth along the axis; the centre's direction (1, s, t) is
+                // sqrt(1 + s^2 + t^2) times longer than its axis component.
+                let r = if cube { near / d * ((1.0 + sqy[y]) + sqx[x]).sqrt() } else { near / d };
+                (ids[at], r)
+            } else {
+                (EMPTY, f32::INFINITY)
+            };
+        }
+    }
+}
+
+/// The clip-space position of a cube-map triangle for drawing page `key` alone into a
+/// [`PAGE`]-square target (face axes `(axis, sign, s, t)` of [`CubeFace::axes`]).
+///
+/// The face's clip space is `(d_s, d_t, near, w = sign d_axis)` with NDC `(s, t) = (d_s, d_t) /
+/// w`. At level `k` a face has `n = 2^k` pages per side ([`PAGE`] `<< k` texels); page
+/// `(px, py)` covers NDC `s` in `[-1 + 2 px / n, -1 + 2 (px + 1) / n]` and, since texel row 0 is
+/// NDC `t = +1`, `t` in `[1 - 2 (py + 1) / n, 1 - 2 py / n]`. The affine map
+///
+/// `s' = n s - (2 px + 1 - n)`,  `t' = n t + (2 py + 1 - n)`
+///
+/// takes that square to `[-1, 1]^2`; in clip space (times `w`) it is linear, so the page's
+/// clip position is `(n d_s - (2 px + 1 - n) w, n d_t + (2 py + 1 - n) w, near, w)`, and depth
+/// (`near / w`) is unchanged. It is computed in `f64` from the vertex's exact offset from the
+/// light and rounded once: the page-relative coordinates keep `f32`'s relative precision, which
+/// a face-wide `s` would not at fine levels.
+#[inline]
+fn page_clip(tri: [Vec3; 3], light: DVec3, near: f32, key: &PageKey, axes: (usize, f32, usize, usize)) -> [Vec4; 3] {
+    let (axis, sign, s, t) = axes;
+    let n = f64::from(1u32 << key.level);
+    let (ox, oy) = (2.0 * f64::from(key.px) + 1.0 - n, 2.0 * f64::from(key.py) + 1.0 - n);
+    tri.map(|p| {
+        let d = p.as_dvec3() - light;
+        let w = f64::from(sign) * d[axis];
+        Vec4::new((n * d[s] - ox * w) as f32, (n * d[t] + oy * w) as f32, near, w as f32)
+    })
+}
+
+/// Per page of `pages` (sorted), the ids of the triangles of its face (`clip`, from
+/// [`cube_triangles`]) whose image may reach it: those whose projected bounding box, grown by
+/// a texel of the page's level (rounding), overlaps the page's square, and every triangle with
+/// a vertex behind the near plane (its image is unbounded).
+fn bin_pages(clip: &[FaceTris], pages: &[PageKey]) -> Vec<Vec<u32>> {
+    // The pages of each (level, face), by position, for ranges of pages.
+    let mut index: rustc_hash::FxHashMap<(u8, u8), rustc_hash::FxHashMap<(u32, u32), usize>> =
+        rustc_hash::FxHashMap::default();
+    for (i, k) in pages.iter().enumerate() {
+        index.entry((k.level, k.face)).or_default().insert((k.px, k.py), i);
+    }
+    let mut groups: Vec<((u8, u8), Vec<(u32, u32, usize)>)> = index
+        .into_iter()
+        .map(|(lf, m)| {
+            let mut v: Vec<(u32, u32, usize)> = m.into_iter().map(|((x, y), i)| (x, y, i)).collect();
+            v.sort_unstable();
+            (lf, v)
+        })
+        .collect();
+    groups.sort_unstable_by_key(|g| g.0);
+    let per_group: Vec<Vec<(usize, Vec<u32>)>> = groups
+        .par_iter()
+        .map(|((level, face), list)| {
+            let n = 1u32 << level;
+            let (tris, ids) = &clip[usize::from(*face)];
+            let lookup: rustc_hash::FxHashMap<(u32, u32), usize> =
+                list.iter().enumerate().map(|(j, &(x, y, _))| ((x, y), j)).collect();
+            let mut bins: Vec<Vec<u32>> = vec![Vec::new(); list.len()];
+            // NDC to page units: page px covers [px, px + 1) of (s + 1) n / 2.
+            let half = f64::from(n) * 0.5;
+            let grow = 2.0 / f64::from(PAGE);
+            for (tri, &id) in tris.iter().zip(ids) {
+                let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+                let mut behind = false;
+                for v in tri {
+                    if v.w <= 0.0 {
+                        behind = true;
+                        break;
+                    }
+                    let (s, t) = (f64::from(v.x) / f64::from(v.w), f64::from(v.y) / f64::from(v.w));
+                    lo = (lo.0.min(s), lo.1.min(t));
+                    hi = (hi.0.max(s), hi.1.max(t));
+                }
+                let (x0, x1, y0, y1) = if behind {
+                    (0, n - 1, 0, n - 1)
+                } else {
+                    let page = |v: f64| ((v + 1.0) * half).floor().clamp(0.0, f64::from(n - 1)) as u32;
+                    // Rows: t = +1 is row 0.
+                    (page(lo.0 - grow), page(hi.0 + grow), page(-hi.1 - grow), page(-lo.1 + grow))
+                };
+                let span = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
+                if span as usize <= list.len() {
+                    for py in y0..=y1 {
+                        for px in x0..=x1 {
+                            if let Some(&j) = lookup.get(&(px, py)) {
+                                bins[j].push(id);
+                            }
+                        }
+                    }
+                } else {
+                    for (j, &(px, py, _)) in list.iter().enumerate() {
+                        if (x0..=x1).contains(&px) && (y0..=y1).contains(&py) {
+                            bins[j].push(id);
+                        }
+                    }
+                }
+            }
+            list.iter().map(|&(_, _, i)| i).zip(bins).collect()
+        })
+        .collect();
+    let mut out = vec![Vec::new(); pages.len()];
+    for (i, bin) in per_group.into_iter().flatten() {
+        out[i] = bin;
+    }
+    out
 }
 
 /// Clip-space triangles and ids of each drawn cube face (module docs), in input order: one pass

@@ -158,7 +158,6 @@ impl VplMap {
         let map = LightMap::build_hemisphere(tris, origin, axis, opts);
         let frame = Frame::around(axis.as_dvec3());
         let res = map.resolution();
-        let ids = map.face_ids(0);
         // The plane seen by texel (x, y) (outside the disc: by the nearest texel inside).
         let plane_at = |x: u32, y: u32| -> Option<&Plane> {
             let (sx, sy) = if disc_contains(res, x, y) {
@@ -166,7 +165,7 @@ impl VplMap {
             } else {
                 nearest_in_disc(res, x as f32 + 0.5, y as f32 + 0.5)?
             };
-            let id = *ids.get(map.texel_index(sx, sy))?;
+            let id = map.id(0, sx, sy);
             planes.get(id as usize).filter(|_| id != EMPTY)
         };
         let n = res as usize * res as usize;

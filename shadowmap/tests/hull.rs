@@ -75,7 +75,7 @@ fn hull_decisions_are_every_points_decision_without_border() {
                 }
                 asked += 1;
                 let hull =
-                    cls.hull(&corners, own(corners[0]), grouped.then(|| groups[own(corners[0]) as usize]));
+                    cls.hull(&corners, own(corners[0]), grouped.then(|| groups[own(corners[0]) as usize]), 0);
                 match hull {
                     Hull::Lit => lit += 1,
                     Hull::Shadowed => shadowed += 1,
@@ -115,6 +115,6 @@ fn hull_declines_paraboloids_and_empty_input() {
     let map = LightMap::build(&tris, Vec3::Y, &opts, &[true; 2]);
     let planes = triangle_planes(&tris);
     let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0 };
-    assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0, None), Hull::Unknown);
-    assert_eq!(cls.hull(&[], 0, None), Hull::Unknown);
+    assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0, None, 0), Hull::Unknown);
+    assert_eq!(cls.hull(&[], 0, None, 0), Hull::Unknown);
 }

@@ -201,7 +201,7 @@ fn compare(map: &LightMap, tris: &[[Vec3; 3]], light: Vec3, kind: MapKind) -> Ag
                     .filter(|&&id| id != EMPTY)
                     .map(|&id| angle_to_edges(o, dir, &tris[id as usize]))
                     .fold(f64::INFINITY, f64::min);
-                let c = MapCoord { face, x: ix as f32 + 0.5, y: iy as f32 + 0.5 };
+                let c = MapCoord { face, level: 0, x: f64::from(ix) + 0.5, y: f64::from(iy) + 0.5 };
                 a.worst_edge_texels = a.worst_edge_texels.max(near_edge / f64::from(map.texel_angle(c)));
             }
         }
@@ -403,12 +403,13 @@ fn coord_and_texel_dir_round_trip_and_stay_in_range() {
                 } else {
                     assert_eq!(c.face, 0);
                 }
-                assert!((0.0..resf).contains(&c.x) && (0.0..resf).contains(&c.y), "{d} -> {c:?} (res {res})");
+                let resd = f64::from(resf);
+                assert!((0.0..resd).contains(&c.x) && (0.0..resd).contains(&c.y), "{d} -> {c:?} (res {res})");
                 assert!(map.texel_in_domain(c.face, c.x as u32, c.y as u32), "{d} -> {c:?} (res {res})");
                 // Back to (nearly) the same direction: exactly for cube faces, within 1.5 texels
                 // at the paraboloid rim (where coord moves into the disc), not at all behind a
                 // single hemisphere.
-                let back = map.texel_dir(c.face, c.x, c.y).as_dvec3();
+                let back = map.texel_dir_at(c.face, 0, c.x, c.y).as_dvec3();
                 let dn = d.as_dvec3().normalize();
                 let angle = back.cross(dn).length().atan2(back.dot(dn));
                 let bound = match kind {
@@ -433,7 +434,9 @@ fn coord_and_texel_dir_round_trip_and_stay_in_range() {
                 let c = map.coord(map.texel_dir(face, x, y));
                 let tol = 2e-3 * resf.max(1.0) / 64.0 + 1e-4;
                 assert!(
-                    c.face == face && (c.x - x).abs() <= tol && (c.y - y).abs() <= tol,
+                    c.face == face
+                        && (c.x - f64::from(x)).abs() <= f64::from(tol)
+                        && (c.y - f64::from(y)).abs() <= f64::from(tol),
                     "({face}, {x}, {y}) -> {c:?} (res {res})"
                 );
             }
@@ -459,7 +462,7 @@ fn clearly_hits(
     let o = map.light().as_dvec3();
     let (id, _) = cast(tris, o, dir);
     let angle = ids.iter().map(|&i| angle_to_edges(o, dir, &tris[i as usize])).fold(f64::INFINITY, f64::min);
-    let c = MapCoord { face, x: ix as f32 + 0.5, y: iy as f32 + 0.5 };
+    let c = MapCoord { face, level: 0, x: f64::from(ix) + 0.5, y: f64::from(iy) + 0.5 };
     ids.contains(&id) && angle > f64::from(map.texel_angle(c))
 }
 
@@ -696,7 +699,7 @@ fn bad_input_does_not_panic() {
         let _ = long.texel_dir(9, f32::NAN, 3.0);
         let _ = long.coord(Vec3::ZERO);
         let _ = long.coord(Vec3::NAN);
-        let _ = long.texel_angle(MapCoord { face: 7, x: f32::NAN, y: -1.0 });
+        let _ = long.texel_angle(MapCoord { face: 7, level: 0, x: f64::NAN, y: -1.0 });
     }
 }
 

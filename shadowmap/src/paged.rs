@@ -1,0 +1,183 @@
+//! Paged light maps: which texels a frame needs, and at what resolution.
+//!
+//! A whole cube map draws every texel of a face at one resolution, though a frame's receivers
+//! touch few of them, and need more texels where they are small in the map than where they are
+//! large. A paged map ([`LightMap::build_pages`](crate::LightMap::build_pages)) has levels
+//! `k = 0 ..= MAX_LEVEL`, level `k` with `PAGE << k` texels per face side, cut into pages of
+//! [`PAGE`] texels square, and draws only the pages that receivers fall on, each at the level
+//! that receiver needs (after Fernando et al. 2001, adaptive shadow maps; Lefohn, Sengupta and
+//! Owens 2007, resolution-matched shadow maps; and Unreal Engine 5's virtual shadow maps).
+//!
+//! # The level a receiver needs
+//!
+//! A pixel of the camera sees a square of side `f = d theta` on a surface at distance `d`
+//! facing the camera, `theta = 2 tan(fov_y / 2) / height` the angle of one pixel (less on a
+//! surface at a slant to the camera's ray, whose footprint stretches in one direction only: the
+//! shorter side decides). Seen from the light at distance `r`, that side subtends at most
+//! `f / r` radians (exactly when it lies across the light's direction). A texel of level `k`
+//! subtends at most `2 / (PAGE 2^k)` radians (at the face centre: see
+//! [`LightMap::texel_angle`](crate::LightMap::texel_angle)). For texels no larger than
+//! `1 / detail` of the footprint, seen from the light,
+//!
+//! `2 / (PAGE 2^k) <= f / (r detail)  <=>  2^k >= 2 r detail / (PAGE d theta)`,
+//!
+//! so the level is `k = ceil(log2(r / d * scale))` with `scale = 2 detail / (PAGE theta)`,
+//! clamped to `[0, MAX_LEVEL]` ([`Resolution::level`]). The ceiling of the logarithm is read
+//! from the `f32`'s exponent and mantissa bits: exact, so that marking and classification (the
+//! same function of the same point) always agree.
+//!
+//! What resolution buys: an occluder thinner than a texel may fall between the texel centres
+//! and be missed by the map and its borders. An occluder of width `w` at distance `r_o` from
+//! the light casts a shadow of width `w r / r_o >= w` on a receiver at `r`; it covers a pixel
+//! only if that width is about `f` or more, and then the occluder subtends `w / r_o >= f / r`
+//! radians: at least `detail` texels. Shadows thinner than a pixel's footprint may still be
+//! missed (they cover a pixel centre by chance); `detail` above 1 shrinks that chance.
+//!
+//! # Marking
+//!
+//! Each receiver marks the pages under the texels a decision can read: its 2x2 footprint and
+//! the margin of the tile test ([`Classifier::hull`](crate::classify::Classifier::hull)), that
+//! is every page within [`MARGIN`] texels of its projection ([`pages_around`]). A lookup that
+//! still reaches a page not drawn reads [`ABSENT`](crate::map::ABSENT): the point is left to a
+//! ray.
+//!
+//! # Paraboloid maps
+//!
+//! Paraboloid maps are not paged: their triangles are tessellated until each projected edge is
+//! a few texels long, and at the fine levels that is tens of thousands of sub-triangles per
+//! scene triangle (the tessellation cap, [`MAX_TESS`](crate::map::MAX_TESS), then binds and the
+//! depths' error grows), where a cube face needs none.
+
+use glam::Vec3;
+
+use crate::map::{MAX_LEVEL, MapCoord, PAGE, PageKey, cube_coord};
+
+/// Texels around a receiver's projection whose pages it marks: the half texel of the 2x2
+/// footprint plus the tile test's margin of 1.5 texels, rounded up.
+pub const MARGIN: f64 = 2.0;
+
+/// How a frame picks the level of a receiver (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolution {
+    /// The camera's position.
+    pub eye: Vec3,
+    /// `2 detail / (PAGE theta)`, `theta` the angle of one pixel.
+    pub scale: f32,
+    /// Levels to coarsen every receiver by (a memory budget's doing), `>= 0`.
+    pub coarsen: u8,
+}
+
+impl Resolution {
+    /// The resolution guide for a camera at `eye` whose pixels subtend `pixel_angle` radians,
+    /// with texels `detail` times finer than a pixel's footprint.
+    pub fn new(eye: Vec3, pixel_angle: f32, detail: f32) -> Self {
+        Self { eye, scale: 2.0 * detail / (PAGE as f32 * pixel_angle), coarsen: 0 }
+    }
+
+    /// The level a receiver at `p` needs for a light at `light` (module docs): the coarsest
+    /// whose texels are no larger than `1 / detail` of the pixel's footprint, then
+    /// [`Resolution::coarsen`] levels coarser; 0 for NaN input.
+    #[inline]
+    pub fn level(&self, p: Vec3, light: Vec3) -> u8 {
+        let ratio = (p - light).length() / (p - self.eye).length() * self.scale;
+        ceil_log2(ratio).saturating_sub(self.coarsen).min(MAX_LEVEL)
+    }
+}
+
+/// `ceil(log2(x))` clamped to `[0, 255]` for `x > 0` (0 for `x <= 1`, NaN, subnormals; 255
+/// for infinity), exactly, from the bits.
+#[inline]
+pub fn ceil_log2(x: f32) -> u8 {
+    if !(x > 1.0) {
+        return 0;
+    }
+    if x.is_infinite() {
+        return u8::MAX;
+    }
+    let b = x.to_bits();
+    let exp = ((b >> 23) & 0xff) as i32 - 127;
+    let k = exp + i32::from(b & 0x7f_ffff != 0);
+    k.clamp(0, 255) as u8
+}
+
+/// Where direction `dir` (from the light) falls in a paged cube map at `level`: the same as
+/// [`LightMap::coord_at`](crate::LightMap::coord_at) of such a map, without one.
+#[inline]
+pub fn locate(dir: Vec3, level: u8) -> MapCoord {
+    cube_coord(dir, PAGE << level.min(MAX_LEVEL), level)
+}
+
+/// Calls `mark` with each page within [`MARGIN`] texels of `c` (a paged cube map's
+/// coordinate): one to four pages, on `c`'s face only (footprints that leave the face are left
+/// to rays).
+#[inline]
+pub fn pages_around(c: MapCoord, mut mark: impl FnMut(PageKey)) {
+    let n = 1u32 << c.level.min(MAX_LEVEL);
+    let page = |v: f64| ((v / f64::from(PAGE)).floor().max(0.0) as u32).min(n - 1);
+    let (x0, x1) = (page(c.x - MARGIN), page(c.x + MARGIN));
+    let (y0, y1) = (page(c.y - MARGIN), page(c.y + MARGIN));
+    for py in y0..=y1 {
+        for px in x0..=x1 {
+            mark(PageKey { level: c.level, face: c.face, py, px });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ceil_log2_is_exact() {
+        assert_eq!(ceil_log2(0.0), 0);
+        assert_eq!(ceil_log2(f32::NAN), 0);
+        assert_eq!(ceil_log2(-4.0), 0);
+        assert_eq!(ceil_log2(1.0), 0);
+        assert_eq!(ceil_log2(1.0f32.next_up()), 1);
+        assert_eq!(ceil_log2(2.0), 1);
+        assert_eq!(ceil_log2(3.0), 2);
+        assert_eq!(ceil_log2(4.0), 2);
+        assert_eq!(ceil_log2(4.0f32.next_up()), 3);
+        assert_eq!(ceil_log2(f32::INFINITY), 255);
+        for k in 0..100 {
+            let x = 2f32.powi(k);
+            assert_eq!(ceil_log2(x), k as u8);
+            assert_eq!(ceil_log2(x.next_up()), k as u8 + 1);
+        }
+    }
+
+    #[test]
+    fn level_grows_with_distance_from_the_light_and_shrinks_with_the_camera() {
+        let r = Resolution::new(Vec3::ZERO, 2.0 / 480.0, 1.0);
+        let near = r.level(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0));
+        let far_light = r.level(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 100.0, 1.0));
+        let far_cam = r.level(Vec3::new(0.0, 0.0, 10.0), Vec3::new(0.0, 1.0, 10.0));
+        assert!(far_light > near && far_cam < near, "{near} {far_light} {far_cam}");
+        // A texel at the level is no larger than the footprint: 2 / (PAGE 2^k) <= f / r.
+        let (d, dist) = (1.0f32, 100.0f32);
+        let k = far_light;
+        assert!(2.0 / (PAGE as f32 * 2f32.powi(k.into())) <= d * 2.0 / 480.0 / dist);
+        assert!(2.0 / (PAGE as f32 * 2f32.powi(i32::from(k) - 1)) > d * 2.0 / 480.0 / dist);
+        // Degenerate input: no panic, a level in range.
+        assert!(r.level(Vec3::ZERO, Vec3::ZERO) <= MAX_LEVEL);
+        assert!(r.level(Vec3::NAN, Vec3::ONE) <= MAX_LEVEL);
+        assert_eq!(r.level(Vec3::ONE, Vec3::splat(1e30)), MAX_LEVEL);
+    }
+
+    #[test]
+    fn pages_around_cover_the_margin() {
+        for (x, y) in [(0.5, 0.5), (63.0, 10.0), (64.5, 127.9), (200.0, 5.0)] {
+            let c = MapCoord { face: 2, level: 2, x, y };
+            let mut got = Vec::new();
+            pages_around(c, |k| got.push(k));
+            for dx in [-MARGIN, 0.0, MARGIN] {
+                for dy in [-MARGIN, 0.0, MARGIN] {
+                    let (px, py) = (((x + dx).max(0.0) / 64.0) as u32, ((y + dy).max(0.0) / 64.0) as u32);
+                    let (px, py) = (px.min(3), py.min(3));
+                    assert!(got.contains(&PageKey { level: 2, face: 2, py, px }), "({x}, {y}) + ({dx}, {dy})");
+                }
+            }
+            assert!(got.len() <= 4);
+        }
+    }
+}

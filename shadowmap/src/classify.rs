@@ -49,6 +49,7 @@
 //! tests: that is what resolution buys.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::map::{ABSENT, EMPTY, LightMap, MapCoord, MapKind};
 
@@ -77,10 +78,24 @@ const AMBIGUOUS: u8 = 3;
 /// not count.
 pub const SHADOW_EPSILON: f32 = 1e-4;
 
-/// Rounding tolerance of the plane intersection, relative to `r`: it is computed relative to
-/// the light (see [`Plane`]), so its error is a few ulps of `r` (`1e-5` is 168 ulps of `2^-24`);
-/// an occluder within it of the point is the point's own surface.
+/// Rounding tolerance of the plane intersection, relative to `r`, in the margins (module docs)
+/// and the tile test: `1e-5` is 168 ulps of `2^-24`.
 const TOLERANCE: f32 = 1e-5;
+
+/// The rounding of the plane intersection `t = D / (n . dir)` relative to `t`, times
+/// `|n . dir|`, for [`Classifier::classify`]'s test of an occluder against the point's own
+/// distance. `D` is exact to `f64` rounding ([`Plane`]); `dir` (an `f32` difference, then
+/// normalised) is off by a few ulps per component, `n` by one or two, and the `f32` dot
+/// product adds three: `n . dir` is off by at most about `4e-7` absolute, so `t` by
+/// `4e-7 / |n . dir|` relative. `1e-6` covers it with a factor 2.5. An occluder whose plane
+/// the ray meets closer to the point than that cannot be told from the point's own surface
+/// by the map: it is left to a ray (ambiguous), unless it lies on the point's very plane.
+///
+/// Why not a fixed fraction of `r`: an occluder in contact with the point (a post on a floor)
+/// is within any fixed fraction of a light far enough away, which would call it the point's
+/// own surface, lit, where the reference's shadow ray, offset by the point's own rounding
+/// alone, is blocked.
+const DIRECTION_ROUNDING: f32 = 1e-6;
 
 /// The plane `n . x = d` of a triangle (`n` unit, `d` in `f64`), for [`Classifier`].
 ///
@@ -112,7 +127,7 @@ impl Plane {
 
 /// The plane of each triangle, for [`Classifier`] (see [`Plane`]).
 pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Plane> {
-    tris.iter()
+    tris.par_iter()
         .map(|t| {
             let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
             if n == Vec3::ZERO || !t.iter().all(|v| v.is_finite()) {
@@ -131,33 +146,28 @@ pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Plane> {
 /// [`LightMap::build_grouped`](crate::LightMap::build_grouped) summarises as one and
 /// [`Classifier::hull`] decides as one surface. Triangles without a plane are their own group.
 pub fn plane_groups(planes: &[Plane]) -> Vec<u32> {
-    let mut first: std::collections::HashMap<[u64; 2], u32> = std::collections::HashMap::new();
-    planes
-        .iter()
-        .enumerate()
-        .map(|(i, pl)| {
-            if *pl == Plane::ZERO {
-                return i as u32;
-            }
-            let n = pl.n.to_array().map(f32::to_bits);
-            let key =
-                [u64::from(n[0]) | u64::from(n[1]) << 32, u64::from(n[2]) ^ pl.d.to_bits().rotate_left(17)];
-            // The key may collide: compare the planes themselves.
-            match first.get(&key) {
-                Some(&g)
-                    if planes[g as usize].n.to_array().map(f32::to_bits) == n
-                        && planes[g as usize].d.to_bits() == pl.d.to_bits() =>
-                {
-                    g
-                }
-                Some(_) => i as u32,
-                None => {
-                    first.insert(key, i as u32);
-                    i as u32
-                }
-            }
-        })
-        .collect()
+    // Sorted by the plane's bits (and then by index), equal planes are runs whose first
+    // element is the group: a parallel sort, where a hash map would insert one at a time.
+    let key = |i: u32| {
+        let pl = &planes[i as usize];
+        let n = pl.n.to_array().map(f32::to_bits);
+        (u64::from(n[0]) << 32 | u64::from(n[1]), u64::from(n[2]), pl.d.to_bits(), i)
+    };
+    let mut order: Vec<(u64, u64, u64, u32)> = (0..planes.len() as u32).into_par_iter().map(key).collect();
+    order.par_sort_unstable();
+    let mut groups: Vec<u32> = (0..planes.len() as u32).collect();
+    let mut first = 0;
+    for k in 0..order.len() {
+        let same = |a: &(u64, u64, u64, u32), b: &(u64, u64, u64, u32)| (a.0, a.1, a.2) == (b.0, b.1, b.2);
+        if k > 0 && !same(&order[k], &order[first]) {
+            first = k;
+        }
+        let i = order[k].3;
+        if planes[i as usize] != Plane::ZERO {
+            groups[i as usize] = order[first].3;
+        }
+    }
+    groups
 }
 
 /// A bound on the absolute rounding error, per axis, of a point interpolated on one of `tris`
@@ -166,11 +176,14 @@ pub fn plane_groups(planes: &[Plane]) -> Vec<u32> {
 /// coordinate plus `gamma(3)` times the largest edge component (`|b1| + |b2| <= 1` inside a
 /// triangle), for [`Classifier::point_error`].
 pub fn point_error_bound(tris: &[[Vec3; 3]]) -> f32 {
-    let (mut coord, mut edge) = (0.0f32, 0.0f32);
-    for t in tris.iter().filter(|t| t.iter().all(|v| v.is_finite())) {
-        coord = coord.max(t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element());
-        edge = edge.max((t[1] - t[0]).abs().max((t[2] - t[0]).abs()).max_element());
-    }
+    let (coord, edge) = tris
+        .par_iter()
+        .filter(|t| t.iter().all(|v| v.is_finite()))
+        .map(|t| {
+            let coord = t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element();
+            (coord, (t[1] - t[0]).abs().max((t[2] - t[0]).abs()).max_element())
+        })
+        .reduce(|| (0.0f32, 0.0f32), |a, b| (a.0.max(b.0), a.1.max(b.1)));
     let gamma = |n: f32| {
         let u = f32::EPSILON * 0.5;
         n * u / (1.0 - n * u)
@@ -325,8 +338,8 @@ impl Classifier<'_> {
             lo = (lo.0.min(c.x), lo.1.min(c.y));
             hi = (hi.0.max(c.x), hi.1.max(c.y));
         }
-        let (x0, y0) = ((lo.0 - margin).floor(), (lo.1 - margin).floor());
-        let (x1, y1) = ((hi.0 + margin).floor(), (hi.1 + margin).floor());
+        let (x0, y0) = (floor(lo.0 - margin), floor(lo.1 - margin));
+        let (x1, y1) = (floor(hi.0 + margin), floor(hi.1 + margin));
         let last = f64::from(res) - 1.0;
         if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= last && y1 <= last) {
             return Hull::Unknown;
@@ -506,16 +519,21 @@ impl Classifier<'_> {
         let near = SHADOW_EPSILON * r;
         let tol = TOLERANCE * r;
         let margin = self.bias * map.texel_angle(c) * r + tol + self.rounding_band(own, dir);
+        let own_plane = self.planes.get(own as usize).copied().unwrap_or(Plane::ZERO);
         let decide = |id: u32, (x, y): (u32, u32)| -> u8 {
             if id == EMPTY || id == own {
                 return LIT;
             }
             let pl = self.planes.get(id as usize).copied().unwrap_or(Plane::ZERO);
+            // A triangle of the point's very plane cannot shadow it.
+            if pl == own_plane && pl != Plane::ZERO {
+                return LIT;
+            }
             let cos = pl.n.dot(dir);
-            let t = if cos.abs() >= 1e-6 {
-                (pl.offset_from(light) / f64::from(cos)) as f32
+            let (t, tol) = if cos.abs() >= 1e-6 {
+                ((pl.offset_from(light) / f64::from(cos)) as f32, DIRECTION_ROUNDING * r / cos.abs())
             } else {
-                map.depth_at(c.level, c.face, x, y)
+                (map.depth_at(c.level, c.face, x, y), tol)
             };
             if !(t > near && t < r - tol) {
                 LIT
@@ -551,6 +569,14 @@ impl Classifier<'_> {
     }
 }
 
+/// `v.floor()` for texel coordinates (`|v| < 2^62`; NaN gives 0), by conversions: without
+/// SSE4.1 in the target, `f64::floor` is a call into libm, in the classifier's inner loop.
+#[inline]
+fn floor(v: f64) -> f64 {
+    let t = v as i64 as f64;
+    if t > v { t - 1.0 } else { t }
+}
+
 /// The 2x2 texels whose centres surround a point's projection `c` (the texel containing it is
 /// one of them).
 struct Footprint {
@@ -567,7 +593,7 @@ impl Footprint {
     #[inline]
     fn of(map: &LightMap, c: MapCoord) -> Self {
         let last = f64::from(map.resolution_at(c.level).saturating_sub(1));
-        let (fx, fy) = ((c.x - 0.5).floor(), (c.y - 0.5).floor());
+        let (fx, fy) = (floor(c.x - 0.5), floor(c.y - 0.5));
         let inside = fx >= 0.0 && fy >= 0.0 && fx + 1.0 <= last && fy + 1.0 <= last;
         let (x0, y0) = (fx as u32, fy as u32);
         let texels = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];

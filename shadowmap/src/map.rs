@@ -108,6 +108,10 @@ type FaceTris = (Vec<[Vec4; 3]>, Vec<u32>);
 /// Input triangles per parallel job.
 const CHUNK: usize = 2048;
 
+/// Triangles per cluster that [`bin_pages`] culls at once by their bounding box (consecutive
+/// triangles of a mesh lie close together).
+const CLUSTER: usize = 256;
+
 /// The parameterisation of a point light's map.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MapKind {
@@ -190,12 +194,11 @@ impl Layout {
 /// Side of a page: a face's texels are stored, and paged maps drawn, in squares of this many
 /// texels per side.
 ///
-/// Why 64: a page is then 32 KB of ids and distances, small enough that a frame's receivers
-/// fill most of each page they touch (a receiver needs about one texel at its level, and
-/// neighbouring receivers land in the same page), and large enough that the per-page costs
-/// (binning the triangles, setting up the ones that straddle pages) stay small beside the
-/// texels' own.
-pub const PAGE: u32 = 64;
+/// Why 32: a page is then 8 KB of ids and 4 KB of depths. A frame's receivers touch the pages
+/// around them, and the smaller the page, the fewer texels it holds that no receiver reads:
+/// on the thesis scenes 32 took a quarter less memory than 64 for the same levels. Smaller
+/// pages cost more per-page work (binning, setting up the triangles that straddle pages).
+pub const PAGE: u32 = 32;
 
 /// Texels of one page.
 const PAGE_TEXELS: usize = (PAGE * PAGE) as usize;
@@ -210,7 +213,7 @@ const PAGE_REGIONS: usize = ((PAGE / REGION) * (PAGE / REGION)) as usize;
 /// `2^22` texels per side is a sixteenth of a texel on the face's rim; a finer grid would place
 /// points by their rounding. It is also what a light a thousand scene sizes away needs for
 /// receivers seen at one texel per pixel (the resolution guide in [`crate::paged`]).
-pub const MAX_LEVEL: u8 = 16;
+pub const MAX_LEVEL: u8 = 17;
 
 /// Id returned by texel lookups in a page that was not drawn: the map cannot tell, so the
 /// classifier leaves the point to a ray. Distinct from every triangle id a map draws (ids from
@@ -244,13 +247,18 @@ const NO_PAGE: u32 = u32::MAX;
 struct Face {
     /// Pages per side.
     n: u32,
+    /// Pages in the table.
+    slots: u32,
     /// Page `py * n + px` to its slot in the arrays below, for small faces ([`DENSE_PAGES`]).
     dense: Vec<u32>,
     /// The same for large faces.
     sparse: rustc_hash::FxHashMap<u32, u32>,
-    /// Per slot, [`PAGE_TEXELS`] ids in [`BLOCK`] order ([`texel_index`]).
+    /// Per slot, [`PAGE_TEXELS`] ids, row-major.
     id: Vec<u32>,
-    dist: Vec<f32>,
+    /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major:
+    /// distances are made from them only when asked for ([`LightMap::depth_at`]), which the
+    /// classifier does only for planes seen edge-on.
+    depth: Vec<f32>,
     /// Per slot, [`PAGE_REGIONS`] [`REGION`]-square blocks, row-major: the one triangle its
     /// texels see ([`EMPTY`] if none), or [`MIXED`] (see [`LightMap::region_id`]).
     region: Vec<u32>,
@@ -263,15 +271,20 @@ impl Face {
     fn new(res: u32) -> Self {
         let n = res.div_ceil(PAGE);
         let pages = n as usize * n as usize;
-        Face { n, dense: if pages <= DENSE_PAGES { vec![NO_PAGE; pages] } else { Vec::new() }, ..Face::default() }
+        Face {
+            n,
+            dense: if pages <= DENSE_PAGES { vec![NO_PAGE; pages] } else { Vec::new() },
+            ..Face::default()
+        }
     }
 
     fn is_empty(&self) -> bool {
-        self.id.is_empty()
+        self.slots == 0
     }
 
+    /// Pages in the page table (the storage may be sized after the table is filled).
     fn pages(&self) -> usize {
-        self.id.len() / PAGE_TEXELS
+        self.slots as usize
     }
 
     /// The slot of page `(px, py)` (both below `n`), if it was drawn.
@@ -289,6 +302,7 @@ impl Face {
     /// Appends a page's slot for page `(px, py)`; its texels are pushed by the caller.
     fn insert(&mut self, px: u32, py: u32) -> usize {
         let s = self.pages();
+        self.slots += 1;
         let k = py * self.n + px;
         if self.dense.is_empty() {
             self.sparse.insert(k, s as u32);
@@ -302,7 +316,7 @@ impl Face {
     #[inline]
     fn index(&self, x: u32, y: u32) -> Option<usize> {
         let s = self.slot(x / PAGE, y / PAGE)?;
-        Some(s * PAGE_TEXELS + texel_index(PAGE, x % PAGE, y % PAGE))
+        Some(s * PAGE_TEXELS + ((y % PAGE) * PAGE + x % PAGE) as usize)
     }
 
     /// The pages drawn, by `(px, py)`.
@@ -325,7 +339,8 @@ impl Face {
         if self.is_empty() {
             return 0;
         }
-        (self.id.len() + self.dist.len() + self.region.len() + self.region_group.len() + self.dense.len()) * 4
+        (self.id.len() + self.depth.len() + self.region.len() + self.region_group.len() + self.dense.len())
+            * 4
             + self.sparse.len() * 8
     }
 }
@@ -376,55 +391,40 @@ fn advise_huge<T>(v: &Vec<T>) {
     let _ = v;
 }
 
-/// The region summaries of one page's ids ([`BLOCK`] order), appended to `by_id` and (if
-/// `groups` is not empty) `by_group`: by triangle ([`Face::region`]) and by `groups[id]`
+/// The region summaries of one page's ids (row-major), appended to `by_id` and (if `groups`
+/// is not empty) `by_group`: by triangle ([`Face::region`]) and by `groups[id]`
 /// ([`Face::region_group`]).
 fn summarise(ids: &[u32], groups: &[u32], by_id: &mut Vec<u32>, by_group: &mut Vec<u32>) {
-    let per = (REGION / BLOCK) as usize;
-    let blocks_x = (PAGE / BLOCK) as usize;
-    let cell = (BLOCK * BLOCK) as usize;
-    let side = (PAGE / REGION) as usize;
+    let (p, r) = (PAGE as usize, REGION as usize);
+    let side = p / r;
     // One id seen, EMPTY, or MIXED once a second one shows up.
     let see = |v: &mut u32, id: u32| {
         if id != EMPTY && id != *v {
             *v = if *v == EMPTY { id } else { MIXED };
         }
     };
-    for ry in 0..side {
-        for rx in 0..side {
-            let (mut v, mut g) = (EMPTY, EMPTY);
-            for by in ry * per..(ry + 1) * per {
-                let first = (by * blocks_x + rx * per) * cell;
-                for &id in &ids[first..first + per * cell] {
-                    see(&mut v, id);
-                    if !groups.is_empty() {
-                        see(&mut g, groups.get(id as usize).copied().unwrap_or(id));
-                    }
-                }
+    let first = by_id.len();
+    by_id.resize(first + side * side, EMPTY);
+    let gfirst = by_group.len();
+    if !groups.is_empty() {
+        by_group.resize(gfirst + side * side, EMPTY);
+    }
+    for (y, row) in ids.chunks_exact(p).enumerate() {
+        for (rx, run) in row.chunks_exact(r).enumerate() {
+            let k = (y / r) * side + rx;
+            let v = &mut by_id[first + k];
+            // Most runs hold one id: see it once.
+            if run.iter().all(|&id| id == run[0]) {
+                see(v, run[0]);
+            } else {
+                run.iter().for_each(|&id| see(v, id));
             }
-            by_id.push(v);
             if !groups.is_empty() {
-                by_group.push(g);
+                let g = &mut by_group[gfirst + k];
+                run.iter().for_each(|&id| see(g, groups.get(id as usize).copied().unwrap_or(id)));
             }
         }
     }
-}
-
-/// Side of the square blocks texels are stored in: 4x4 ids are one 64-byte cache line.
-///
-/// Why: classifying the pixels of an image looks up, per pixel, the texel under it and its 2x2
-/// neighbourhood; neighbouring pixels fall on neighbouring texels in both directions of the map,
-/// and in row-major storage every step across map rows is a new cache line (of a 16 MB face at
-/// 2048^2). Measured: the texel loads were 40 % of the classification time.
-const BLOCK: u32 = 4;
-
-/// Storage index of texel `(x, y)` of a `res`-square face in [`BLOCK`]-square blocks, the blocks
-/// row-major, the texels of a block row-major.
-#[inline]
-fn texel_index(res: u32, x: u32, y: u32) -> usize {
-    let blocks_x = res.div_ceil(BLOCK) as usize;
-    let (bx, by) = ((x / BLOCK) as usize, (y / BLOCK) as usize);
-    (by * blocks_x + bx) * (BLOCK * BLOCK) as usize + ((y % BLOCK) * BLOCK + x % BLOCK) as usize
 }
 
 /// A light's depth map: 6 cube faces or 2 paraboloid hemispheres (or 1 hemisphere, for VPLs),
@@ -557,12 +557,9 @@ impl LightMap {
             id: reserved_huge(if drawn.iter().any(|&d| d) { texels } else { 0 }),
             ..Target::default()
         };
-        let mut cube = if layout == Layout::Cube {
-            cube_triangles(tris, &valid, light, near, &drawn)
-        } else {
-            vec![]
-        }
-        .into_iter();
+        let mut cube =
+            if layout == Layout::Cube { cube_triangles(tris, &valid, light, near, &drawn) } else { vec![] }
+                .into_iter();
         for (f, &draw) in drawn.iter().enumerate() {
             let cube_face = cube.next();
             if !draw {
@@ -606,9 +603,11 @@ impl LightMap {
         let mut pages: Vec<PageKey> = pages
             .iter()
             .copied()
-            .filter(|k| k.level <= MAX_LEVEL && usize::from(k.face) < 6 && {
-                let n = PAGE << k.level;
-                k.px < n / PAGE && k.py < n / PAGE
+            .filter(|k| {
+                k.level <= MAX_LEVEL && usize::from(k.face) < 6 && {
+                    let n = PAGE << k.level;
+                    k.px < n / PAGE && k.py < n / PAGE
+                }
             })
             .collect();
         pages.sort_unstable();
@@ -621,52 +620,82 @@ impl LightMap {
         if pages.is_empty() {
             return map;
         }
-        let clip = cube_triangles(tris, &valid, light, near, &faces);
         // Per page, the triangles of its face whose image may reach it.
-        let bins = bin_pages(&clip, &pages);
+        let (offsets, binned) = bin_pages(tris, &valid, light, near, &pages);
         let l = light.as_dvec3();
-        let drawn: Vec<(Vec<u32>, Vec<f32>, u64)> = pages
-            .par_iter()
-            .zip(&bins)
-            .map_init(
-                || (Rasterizer::new(), Target::default(), Vec::new()),
-                |(rasterizer, target, tris_out), (key, bin)| {
-                    let (axis, sign, s, t) = CubeFace::ALL[usize::from(key.face)].axes();
-                    tris_out.clear();
-                    tris_out.extend(bin.iter().map(|&id| page_clip(tris[id as usize], l, near, key, (axis, sign, s, t))));
-                    rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &MAP_RASTER, target);
-                    let (mut id, mut dist) = (vec![0u32; PAGE_TEXELS], vec![0f32; PAGE_TEXELS]);
-                    let res = PAGE << key.level;
-                    let origin = (key.px * PAGE, key.py * PAGE);
-                    finish_page(Layout::Cube, near, res, origin, (&target.id, &target.depth, PAGE as usize, (0, 0)), &mut id, &mut dist);
-                    (id, dist, bin.len() as u64)
-                },
-            )
-            .collect();
         let levels = usize::from(pages.last().map_or(0, |k| k.level)) + 1;
         for lv in 1..levels {
             for _ in 0..6 {
                 map.faces.push(Face::new(PAGE << lv));
             }
         }
-        for (key, (id, dist, tris)) in pages.iter().zip(drawn) {
-            map.add_page(*key, &id, &dist, groups);
-            map.triangles_drawn += tris;
+        // Every face's storage sized once (growing it page by page reallocated and faulted in
+        // its memory several times), its pages in `pages` order; then each page drawn straight
+        // into its slot.
+        let with_groups = !groups.is_empty();
+        for key in &pages {
+            let face = &mut map.faces[usize::from(key.level) * 6 + usize::from(key.face)];
+            face.insert(key.px, key.py);
         }
+        for face in map.faces.iter_mut().filter(|f| !f.is_empty()) {
+            let n = face.pages();
+            face.id = vec![0; n * PAGE_TEXELS];
+            face.depth = vec![0.0; n * PAGE_TEXELS];
+            face.region = vec![0; n * PAGE_REGIONS];
+            face.region_group = if with_groups { vec![0; n * PAGE_REGIONS] } else { Vec::new() };
+        }
+        let mut slots: Vec<PageSlot> = Vec::with_capacity(pages.len());
+        for face in map.faces.iter_mut() {
+            let groups_out: Vec<&mut [u32]> = if with_groups {
+                face.region_group.chunks_mut(PAGE_REGIONS).collect()
+            } else {
+                (0..face.id.len() / PAGE_TEXELS).map(|_| Default::default()).collect()
+            };
+            slots.extend(
+                face.id
+                    .chunks_mut(PAGE_TEXELS)
+                    .zip(face.depth.chunks_mut(PAGE_TEXELS))
+                    .zip(face.region.chunks_mut(PAGE_REGIONS))
+                    .zip(groups_out)
+                    .map(|(((a, b), c), d)| (a, b, c, d)),
+            );
+        }
+        // Faces are in (level, face) order and their slots in `pages` order: so is `slots`.
+        let triangles: u64 = pages
+            .par_iter()
+            .zip(slots.into_par_iter())
+            .enumerate()
+            .map_init(
+                || (Rasterizer::new(), Target::default(), Vec::new(), Vec::new(), Vec::new()),
+                |(rasterizer, target, tris_out, region, region_group),
+                 (i, (key, (id, depth, reg, reg_g)))| {
+                    let bin = &binned[offsets[i]..offsets[i + 1]];
+                    let (axis, sign, s, t) = CubeFace::ALL[usize::from(key.face)].axes();
+                    tris_out.clear();
+                    tris_out.extend(
+                        bin.iter().map(|&id| page_clip(tris[id as usize], l, near, key, (axis, sign, s, t))),
+                    );
+                    rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &MAP_RASTER, target);
+                    // The page is the target itself: a cube face at a paged level is a whole
+                    // number of pages, and empty texels already hold EMPTY and depth 0.
+                    id.copy_from_slice(&target.id);
+                    depth.copy_from_slice(&target.depth);
+                    region.clear();
+                    region_group.clear();
+                    summarise(&target.id, groups, region, region_group);
+                    reg.copy_from_slice(region);
+                    reg_g.copy_from_slice(region_group);
+                    bin.len() as u64
+                },
+            )
+            .sum();
+        for key in &pages {
+            map.drawn[usize::from(key.face)] = true;
+        }
+        map.pages_rasterized += pages.len() as u64;
+        map.triangles_drawn += triangles;
         map.faces_rasterized += faces.iter().filter(|&&f| f).count() as u32;
         map
-    }
-
-    /// Adds page `key` (not already drawn) with its texels in [`BLOCK`] order.
-    fn add_page(&mut self, key: PageKey, id: &[u32], dist: &[f32], groups: &[u32]) {
-        let nf = self.layout.face_count();
-        let face = &mut self.faces[usize::from(key.level) * nf + usize::from(key.face)];
-        face.insert(key.px, key.py);
-        face.id.extend_from_slice(id);
-        face.dist.extend_from_slice(dist);
-        summarise(id, groups, &mut face.region, &mut face.region_group);
-        self.drawn[usize::from(key.face)] = true;
-        self.pages_rasterized += 1;
     }
 
     /// Stores a whole face from the rasterizer's row-major ids and reversed-Z depths: every
@@ -675,15 +704,15 @@ impl LightMap {
     fn store_face(&mut self, f: usize, ids: &[u32], depth: &[f32], groups: &[u32]) {
         let res = self.base;
         let n = res.div_ceil(PAGE);
-        let (layout, near) = (self.layout, self.near);
+        let layout = self.layout;
         let pages = n as usize * n as usize;
         // Zeroed allocations are mapped lazily (and not advised huge: `advise_huge`): every
         // element is written below, once.
-        let (mut id, mut dist) = (vec![0u32; pages * PAGE_TEXELS], vec![0f32; pages * PAGE_TEXELS]);
-        id.par_chunks_mut(PAGE_TEXELS).zip(dist.par_chunks_mut(PAGE_TEXELS)).enumerate().for_each(
-            |(k, (id, dist))| {
+        let (mut id, mut dep) = (vec![0u32; pages * PAGE_TEXELS], vec![0f32; pages * PAGE_TEXELS]);
+        id.par_chunks_mut(PAGE_TEXELS).zip(dep.par_chunks_mut(PAGE_TEXELS)).enumerate().for_each(
+            |(k, (id, dep))| {
                 let origin = ((k as u32 % n) * PAGE, (k as u32 / n) * PAGE);
-                finish_page(layout, near, res, origin, (ids, depth, res as usize, origin), id, dist);
+                finish_page(layout, res, origin, (ids, depth, res as usize), id, dep);
             },
         );
         let mut face = Face::new(res);
@@ -702,6 +731,7 @@ impl LightMap {
             face.region_group.extend(b);
         }
         // Slots in row-major page order: page k in slot k.
+        face.slots = pages as u32;
         for k in 0..pages as u32 {
             if face.dense.is_empty() {
                 face.sparse.insert(k, k);
@@ -710,7 +740,7 @@ impl LightMap {
             }
         }
         face.id = id;
-        face.dist = dist;
+        face.depth = dep;
         self.faces[f] = face;
         self.drawn[f] = true;
         self.pages_rasterized += pages as u64;
@@ -924,7 +954,40 @@ impl LightMap {
     /// [`LightMap::depth`] at `level`.
     #[inline]
     pub fn depth_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> f32 {
-        self.texel(level, face, ix, iy).map_or(f32::INFINITY, |(f, i)| f.dist[i])
+        let Ok((f, i)) = self.texel(level, face, ix, iy) else { return f32::INFINITY };
+        let d = f.depth[i];
+        // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
+        if d.is_nan() || d <= 0.0 {
+            return f32::INFINITY;
+        }
+        if self.layout != Layout::Cube {
+            return self.near / d;
+        }
+        // Cube: w = near / depth along the axis; the centre's direction (1, s, t) is
+        // sqrt(1 + s^2 + t^2) times longer than its axis component. In f32 (correctly rounded
+        // division and root, a few ulps in all) from the centre's exact face coordinates.
+        let inv = 2.0 / f64::from(self.resolution_at(level));
+        let sq = |i: u32| ((f64::from(i) + 0.5) * inv - 1.0).powi(2) as f32;
+        self.near / d * ((1.0 + sq(iy)) + sq(ix)).sqrt()
+    }
+
+    /// The distance stored at face position `(u, v)` (fractions of the face's side, `[0, 1)`)
+    /// by the finest level whose page there was drawn (`f32::INFINITY` if none, or empty): for
+    /// showing a paged map's face whole. For a whole map, [`LightMap::depth`] there.
+    pub fn depth_finest(&self, face: u8, u: f64, v: f64) -> f32 {
+        for level in (0..self.levels()).rev() {
+            let res = f64::from(self.resolution_at(level));
+            let (x, y) = ((u * res).max(0.0) as u32, (v * res).max(0.0) as u32);
+            if let Ok((f, i)) = self.texel(level, face, x, y)
+                && f.id[i] != EMPTY
+            {
+                return self.depth_at(level, face, x, y);
+            }
+            if self.texel(level, face, x, y).is_ok() {
+                return f32::INFINITY;
+            }
+        }
+        f32::INFINITY
     }
 
     /// Angle in radians subtended by one texel at `c` (the largest of its two sides): the
@@ -1007,7 +1070,8 @@ impl LightMap {
 
     /// Whether page `key` was drawn.
     pub fn has_page(&self, key: PageKey) -> bool {
-        self.face_at(key.level, key.face).is_some_and(|f| key.px < f.n && key.py < f.n && f.slot(key.px, key.py).is_some())
+        self.face_at(key.level, key.face)
+            .is_some_and(|f| key.px < f.n && key.py < f.n && f.slot(key.px, key.py).is_some())
     }
 
     /// The pages drawn, in [`PageKey`] order.
@@ -1088,17 +1152,55 @@ impl LightMap {
             }
             let f = &other.faces[usize::from(key.level) * nf + usize::from(key.face)];
             let s = f.slot(key.px, key.py).expect("listed page");
-            let (id, dist) = (&f.id[s * PAGE_TEXELS..][..PAGE_TEXELS], &f.dist[s * PAGE_TEXELS..][..PAGE_TEXELS]);
+            let (id, depth) =
+                (&f.id[s * PAGE_TEXELS..][..PAGE_TEXELS], &f.depth[s * PAGE_TEXELS..][..PAGE_TEXELS]);
             let face = &mut self.faces[usize::from(key.level) * nf + usize::from(key.face)];
             face.insert(key.px, key.py);
             face.id.extend_from_slice(id);
-            face.dist.extend_from_slice(dist);
+            face.depth.extend_from_slice(depth);
             face.region.extend_from_slice(&f.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
             if groups {
                 face.region_group.extend_from_slice(&f.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
             }
             self.drawn[usize::from(key.face)] = true;
             self.pages_rasterized += 1;
+        }
+    }
+
+    /// Drops the pages of a paged map for which `keep` is false (a memory budget's eviction:
+    /// the pages a new view no longer reads), keeping the others as they are. Whole maps are
+    /// left unchanged.
+    pub fn retain_pages(&mut self, keep: impl Fn(PageKey) -> bool) {
+        if !self.paged {
+            return;
+        }
+        let nf = self.layout.face_count();
+        for (i, face) in self.faces.iter_mut().enumerate() {
+            let (level, f) = ((i / nf) as u8, (i % nf) as u8);
+            let keys = face.keys();
+            if keys.iter().all(|&(px, py)| keep(PageKey { level, face: f, py, px })) {
+                continue;
+            }
+            let mut out = Face::new(face.n * PAGE);
+            let groups = !face.region_group.is_empty();
+            for (px, py) in keys {
+                if !keep(PageKey { level, face: f, py, px }) {
+                    continue;
+                }
+                let s = face.slot(px, py).expect("listed page");
+                out.insert(px, py);
+                out.id.extend_from_slice(&face.id[s * PAGE_TEXELS..][..PAGE_TEXELS]);
+                out.depth.extend_from_slice(&face.depth[s * PAGE_TEXELS..][..PAGE_TEXELS]);
+                out.region.extend_from_slice(&face.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
+                if groups {
+                    out.region_group
+                        .extend_from_slice(&face.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
+                }
+            }
+            *face = out;
+        }
+        for f in 0..nf {
+            self.drawn[f] = self.faces.iter().skip(f).step_by(nf).any(|x| !x.is_empty());
         }
     }
 
@@ -1242,34 +1344,21 @@ fn usable(t: &[Vec3; 3], l: DVec3) -> Option<f64> {
     (h > edge_on_abs && edge_on_rel(h)).then_some(far)
 }
 
-/// One page's stored texels from the rasterizer's row-major ids and reversed-Z depths, `src` =
-/// `(ids, depths, row stride, position of the page's first texel in them)`: depths turned into
-/// distances, texels outside a paraboloid's disc or beyond the face cleared, both in
-/// [`BLOCK`] order (padded with [`EMPTY`] and infinity). `origin` is the page's first texel on
-/// a face of `res` texels per side.
-///
-/// In `f32` (so that it vectorises): `near / depth` and the square root are correctly rounded,
-/// a few ulps in all (`~3e-7` relative) on top of the depth's own rounding; the texel centres'
-/// face coordinates come from `f64`, exact at any level.
+/// One page of a whole face from the rasterizer's row-major ids and reversed-Z depths, `src`
+/// = `(ids, depths, row stride)`: texels outside a paraboloid's disc or beyond the face cleared
+/// ([`EMPTY`], depth 0), row-major. `origin` is the page's first texel on a face of `res`
+/// texels per side.
 fn finish_page(
     layout: Layout,
-    near: f32,
     res: u32,
     origin: (u32, u32),
-    src: (&[u32], &[f32], usize, (u32, u32)),
+    src: (&[u32], &[f32], usize),
     id_out: &mut [u32],
-    dist_out: &mut [f32],
+    depth_out: &mut [f32],
 ) {
-    let (ids, depth, stride, (sx, sy)) = src;
-    let b = BLOCK as usize;
+    let (ids, depth, stride) = src;
     let p = PAGE as usize;
-    let inv = 2.0 / f64::from(res);
     let cube = layout == Layout::Cube;
-    // Squared face coordinate of the page's texel centres (the same for rows: t = -s).
-    let sq = |o: u32| -> [f32; PAGE as usize] {
-        std::array::from_fn(|i| ((f64::from(o + i as u32) + 0.5) * inv - 1.0).powi(2) as f32)
-    };
-    let (sqx, sqy) = (sq(origin.0), sq(origin.1));
     for y in 0..p {
         let gy = origin.1 + y as u32;
         let (x0, x1) = if gy >= res {
@@ -1279,21 +1368,12 @@ fn finish_page(
         } else {
             disc_span(res, gy)
         };
+        let row = gy as usize * stride + origin.0 as usize;
         for x in 0..p {
             let gx = origin.0 + x as u32;
-            let k = ((y / b) * (p / b) + x / b) * b * b + (y % b) * b + x % b;
-            let inside = (x0..x1).contains(&gx);
-            let at = (sy as usize + y) * stride + sx as usize + x;
-            let d = if inside { depth[at] } else { 0.0 };
-            // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
-            (id_out[k], dist_out[k]) = if d > 0.0 {
-                // Cube: w = near / depth along the axis; the centre's direction (1, s, t) is
-                // sqrt(1 + s^2 + t^2) times longer than its axis component.
-                let r = if cube { near / d * ((1.0 + sqy[y]) + sqx[x]).sqrt() } else { near / d };
-                (ids[at], r)
-            } else {
-                (EMPTY, f32::INFINITY)
-            };
+            let k = y * p + x;
+            (id_out[k], depth_out[k]) =
+                if (x0..x1).contains(&gx) { (ids[row + x], depth[row + x]) } else { (EMPTY, 0.0) };
         }
     }
 }
@@ -1314,7 +1394,13 @@ fn finish_page(
 /// light and rounded once: the page-relative coordinates keep `f32`'s relative precision, which
 /// a face-wide `s` would not at fine levels.
 #[inline]
-fn page_clip(tri: [Vec3; 3], light: DVec3, near: f32, key: &PageKey, axes: (usize, f32, usize, usize)) -> [Vec4; 3] {
+fn page_clip(
+    tri: [Vec3; 3],
+    light: DVec3,
+    near: f32,
+    key: &PageKey,
+    axes: (usize, f32, usize, usize),
+) -> [Vec4; 3] {
     let (axis, sign, s, t) = axes;
     let n = f64::from(1u32 << key.level);
     let (ox, oy) = (2.0 * f64::from(key.px) + 1.0 - n, 2.0 * f64::from(key.py) + 1.0 - n);
@@ -1325,81 +1411,205 @@ fn page_clip(tri: [Vec3; 3], light: DVec3, near: f32, key: &PageKey, axes: (usiz
     })
 }
 
-/// Per page of `pages` (sorted), the ids of the triangles of its face (`clip`, from
-/// [`cube_triangles`]) whose image may reach it: those whose projected bounding box, grown by
-/// a texel of the page's level (rounding), overlaps the page's square, and every triangle with
-/// a vertex behind the near plane (its image is unbounded).
-fn bin_pages(clip: &[FaceTris], pages: &[PageKey]) -> Vec<Vec<u32>> {
-    // The pages of each (level, face), by position, for ranges of pages.
-    let mut index: rustc_hash::FxHashMap<(u8, u8), rustc_hash::FxHashMap<(u32, u32), usize>> =
-        rustc_hash::FxHashMap::default();
-    for (i, k) in pages.iter().enumerate() {
-        index.entry((k.level, k.face)).or_default().insert((k.px, k.py), i);
+/// The NDC bounds `(lo, hi)` of a projected triangle or box, and whether a point of it is
+/// behind the light (its image is then unbounded).
+type NdcBounds = ((f64, f64), (f64, f64), bool);
+
+/// One page's storage: ids, depths, and region summaries by triangle and by group.
+type PageSlot<'a> = (&'a mut [u32], &'a mut [f32], &'a mut [u32], &'a mut [u32]);
+
+/// The marked pages of one level of one face, for [`bin_pages`].
+struct PageGroup {
+    level: u8,
+    /// The rectangle `[x0, x1] x [y0, y1]` of pages that holds them all.
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+    /// Page `(x, y)` of the rectangle to its index in the page list: dense (row-major over the
+    /// rectangle, `u32::MAX` for none) or, for a large rectangle, hashed.
+    dense: Vec<u32>,
+    sparse: rustc_hash::FxHashMap<(u32, u32), u32>,
+    /// The pages, by `(x, y, index)`.
+    list: Vec<(u32, u32, u32)>,
+}
+
+impl PageGroup {
+    #[inline]
+    fn index(&self, x: u32, y: u32) -> Option<u32> {
+        if self.dense.is_empty() {
+            self.sparse.get(&(x, y)).copied()
+        } else {
+            let w = self.x1 - self.x0 + 1;
+            let i = self.dense[((y - self.y0) * w + (x - self.x0)) as usize];
+            (i != u32::MAX).then_some(i)
+        }
     }
-    let mut groups: Vec<((u8, u8), Vec<(u32, u32, usize)>)> = index
-        .into_iter()
-        .map(|(lf, m)| {
-            let mut v: Vec<(u32, u32, usize)> = m.into_iter().map(|((x, y), i)| (x, y, i)).collect();
-            v.sort_unstable();
-            (lf, v)
-        })
-        .collect();
-    groups.sort_unstable_by_key(|g| g.0);
-    let per_group: Vec<Vec<(usize, Vec<u32>)>> = groups
-        .par_iter()
-        .map(|((level, face), list)| {
-            let n = 1u32 << level;
-            let (tris, ids) = &clip[usize::from(*face)];
-            let lookup: rustc_hash::FxHashMap<(u32, u32), usize> =
-                list.iter().enumerate().map(|(j, &(x, y, _))| ((x, y), j)).collect();
-            let mut bins: Vec<Vec<u32>> = vec![Vec::new(); list.len()];
-            // NDC to page units: page px covers [px, px + 1) of (s + 1) n / 2.
-            let half = f64::from(n) * 0.5;
-            let grow = 2.0 / f64::from(PAGE);
-            for (tri, &id) in tris.iter().zip(ids) {
-                let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
-                let mut behind = false;
-                for v in tri {
-                    if v.w <= 0.0 {
-                        behind = true;
-                        break;
-                    }
-                    let (s, t) = (f64::from(v.x) / f64::from(v.w), f64::from(v.y) / f64::from(v.w));
-                    lo = (lo.0.min(s), lo.1.min(t));
-                    hi = (hi.0.max(s), hi.1.max(t));
+}
+
+/// Per page of `pages` (sorted), the ids (in input order) of the usable triangles `valid` of its
+/// face whose image may reach it, as one list with offsets: each triangle is culled per face as
+/// [`cube_triangles`] does, then binned by its projected bounding box, grown by a texel of the
+/// page's level (rounding), into the marked pages it overlaps; a triangle with a vertex behind
+/// the light's plane of the face (an unbounded image) goes to every marked page of the face.
+/// One pass over the triangles for every face and level, in parallel chunks whose
+/// (page, triangle) pairs are then sorted by page, stably: the same bins for any thread count.
+fn bin_pages(
+    tris: &[[Vec3; 3]],
+    valid: &[u32],
+    light: Vec3,
+    near: f32,
+    pages: &[PageKey],
+) -> (Vec<usize>, Vec<u32>) {
+    // The groups of each face.
+    let mut faces: [Vec<PageGroup>; 6] = Default::default();
+    let mut start = 0;
+    while start < pages.len() {
+        let (level, face) = (pages[start].level, pages[start].face);
+        let end = start + pages[start..].iter().take_while(|k| (k.level, k.face) == (level, face)).count();
+        let list: Vec<(u32, u32, u32)> = (start..end).map(|i| (pages[i].px, pages[i].py, i as u32)).collect();
+        let (x0, x1) =
+            (list.iter().map(|p| p.0).min().unwrap_or(0), list.iter().map(|p| p.0).max().unwrap_or(0));
+        let (y0, y1) =
+            (list.iter().map(|p| p.1).min().unwrap_or(0), list.iter().map(|p| p.1).max().unwrap_or(0));
+        let area = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
+        let mut g = PageGroup { level, x0, y0, x1, y1, dense: Vec::new(), sparse: Default::default(), list };
+        if area <= 1 << 16 {
+            g.dense = vec![u32::MAX; area as usize];
+            let w = x1 - x0 + 1;
+            for &(x, y, i) in &g.list {
+                g.dense[((y - y0) * w + (x - x0)) as usize] = i;
+            }
+        } else {
+            g.sparse = g.list.iter().map(|&(x, y, i)| ((x, y), i)).collect();
+        }
+        faces[usize::from(face)].push(g);
+        start = end;
+    }
+    let axes: Vec<(usize, (usize, f32, usize, usize))> =
+        (0..6).filter(|&f| !faces[f].is_empty()).map(|f| (f, CubeFace::ALL[f].axes())).collect();
+    // The marked pages of group `g` that an image with NDC bounds `lo..hi` (or, if `behind`,
+    // an unbounded one) may reach: a rectangle of pages, empty if `x0 > x1` or `y0 > y1`.
+    let range = |g: &PageGroup, lo: (f64, f64), hi: (f64, f64), behind: bool| -> (u32, u32, u32, u32) {
+        if behind {
+            return (g.x0, g.x1, g.y0, g.y1);
+        }
+        // NDC to pages: page px covers [px, px + 1) of (s + 1) n / 2; row 0 is t = +1. Grown
+        // by a texel of the level. Truncation is the floor of the clamped value (NaN gives 0).
+        let n = 1u32 << g.level;
+        let half = f64::from(n) * 0.5;
+        let grow = 2.0 / f64::from(PAGE << g.level);
+        let page = |v: f64| (((v + 1.0) * half).max(0.0) as u32).min(n - 1);
+        let (x0, x1) = (page(lo.0 - grow), page(hi.0 + grow));
+        let (y0, y1) = (page(-hi.1 - grow), page(-lo.1 + grow));
+        (x0.max(g.x0), x1.min(g.x1), y0.max(g.y0), y1.min(g.y1))
+    };
+    // Clip-space points of a face (`(d_s, d_t, near, sign d_axis)`): whether all lie beyond one
+    // of its planes (the face culling of `cube_triangles`), else their NDC bounds and whether
+    // one is behind the light.
+    let project = |v: &[Vec4]| -> Option<NdcBounds> {
+        let all = |f: &dyn Fn(&Vec4) -> bool| v.iter().all(f);
+        if all(&|c| c.w < near)
+            || all(&|c| c.x > c.w)
+            || all(&|c| c.x < -c.w)
+            || all(&|c| c.y > c.w)
+            || all(&|c| c.y < -c.w)
+        {
+            return None;
+        }
+        let behind = v.iter().any(|c| c.w <= 0.0);
+        let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+        for c in v {
+            let (x, y) = (f64::from(c.x) / f64::from(c.w), f64::from(c.y) / f64::from(c.w));
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        Some((lo, hi, behind))
+    };
+    let clip =
+        |d: Vec3, (axis, sign, s, t): (usize, f32, usize, usize)| Vec4::new(d[s], d[t], near, sign * d[axis]);
+    let parts: Vec<Vec<(u32, u32)>> = valid
+        .par_chunks(CLUSTER)
+        .map(|cluster| {
+            let mut out = Vec::new();
+            // The faces whose marked pages the cluster's bounding box may reach: the box is
+            // convex, so is its image, so what culls all 8 corners culls every triangle in it.
+            let (mut bmin, mut bmax) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for &id in cluster {
+                for p in tris[id as usize] {
+                    (bmin, bmax) = (bmin.min(p - light), bmax.max(p - light));
                 }
-                let (x0, x1, y0, y1) = if behind {
-                    (0, n - 1, 0, n - 1)
-                } else {
-                    let page = |v: f64| ((v + 1.0) * half).floor().clamp(0.0, f64::from(n - 1)) as u32;
-                    // Rows: t = +1 is row 0.
-                    (page(lo.0 - grow), page(hi.0 + grow), page(-hi.1 - grow), page(-lo.1 + grow))
-                };
-                let span = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
-                if span as usize <= list.len() {
-                    for py in y0..=y1 {
-                        for px in x0..=x1 {
-                            if let Some(&j) = lookup.get(&(px, py)) {
-                                bins[j].push(id);
-                            }
+            }
+            let corners: [Vec3; 8] = std::array::from_fn(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { bmin.x } else { bmax.x },
+                    if i & 2 == 0 { bmin.y } else { bmax.y },
+                    if i & 4 == 0 { bmin.z } else { bmax.z },
+                )
+            });
+            let live: Vec<(usize, (usize, f32, usize, usize))> = axes
+                .iter()
+                .copied()
+                .filter(|&(f, ax)| {
+                    let v = corners.map(|d| clip(d, ax));
+                    project(&v).is_some_and(|(lo, hi, behind)| {
+                        faces[f].iter().any(|g| {
+                            let (x0, x1, y0, y1) = range(g, lo, hi, behind);
+                            x0 <= x1 && y0 <= y1
+                        })
+                    })
+                })
+                .collect();
+            if live.is_empty() {
+                return out;
+            }
+            for &id in cluster {
+                let d = tris[id as usize].map(|p| p - light);
+                for &(f, ax) in &live {
+                    let v = d.map(|d| clip(d, ax));
+                    let Some((lo, hi, behind)) = project(&v) else { continue };
+                    for g in &faces[f] {
+                        let (x0, x1, y0, y1) = range(g, lo, hi, behind);
+                        if x0 > x1 || y0 > y1 {
+                            continue;
                         }
-                    }
-                } else {
-                    for (j, &(px, py, _)) in list.iter().enumerate() {
-                        if (x0..=x1).contains(&px) && (y0..=y1).contains(&py) {
-                            bins[j].push(id);
+                        let span = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
+                        if span <= g.list.len() as u64 {
+                            for py in y0..=y1 {
+                                for px in x0..=x1 {
+                                    if let Some(i) = g.index(px, py) {
+                                        out.push((i, id));
+                                    }
+                                }
+                            }
+                        } else {
+                            for &(px, py, i) in &g.list {
+                                if (x0..=x1).contains(&px) && (y0..=y1).contains(&py) {
+                                    out.push((i, id));
+                                }
+                            }
                         }
                     }
                 }
             }
-            list.iter().map(|&(_, _, i)| i).zip(bins).collect()
+            out
         })
         .collect();
-    let mut out = vec![Vec::new(); pages.len()];
-    for (i, bin) in per_group.into_iter().flatten() {
-        out[i] = bin;
+    // Counting sort by page, stable.
+    let mut offsets = vec![0usize; pages.len() + 1];
+    for &(i, _) in parts.iter().flatten() {
+        offsets[i as usize + 1] += 1;
     }
-    out
+    for i in 0..pages.len() {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut next = offsets.clone();
+    let mut ids = vec![0u32; offsets[pages.len()]];
+    for &(i, id) in parts.iter().flatten() {
+        ids[next[i as usize]] = id;
+        next[i as usize] += 1;
+    }
+    (offsets, ids)
 }
 
 /// Clip-space triangles and ids of each drawn cube face (module docs), in input order: one pass

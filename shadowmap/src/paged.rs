@@ -10,18 +10,29 @@
 //!
 //! # The level a receiver needs
 //!
-//! A pixel of the camera sees a square of side `f = d theta` on a surface at distance `d`
-//! facing the camera, `theta = 2 tan(fov_y / 2) / height` the angle of one pixel (less on a
-//! surface at a slant to the camera's ray, whose footprint stretches in one direction only: the
-//! shorter side decides). Seen from the light at distance `r`, that side subtends at most
-//! `f / r` radians (exactly when it lies across the light's direction). A texel of level `k`
+//! A pixel of the camera sees a square of side `d theta` on a surface at distance `d` facing
+//! the camera, `theta = 2 tan(fov_y / 2) / height` the angle of one pixel; on a surface whose
+//! normal makes cosine `cos_v` with the direction to the camera, the footprint stretches by
+//! `1 / cos_v` along the slant, an area of `(d theta)^2 / cos_v`. The texel is matched to the
+//! square of the same area, of side `f = d theta / sqrt(cos_v)` (with `cos_v` clamped to at
+//! least `1/16`, so at most four times the face-on side): matching the short side instead would
+//! spend up to `1 / cos_v` texels per pixel on surfaces seen at a slant, which resolve no more
+//! shadow detail in the image than they have pixels. Seen from the light at distance `r`, that
+//! side subtends `f / r` radians across the light's direction, but only `f cos_l / r` along it
+//! on a surface the light grazes (`cos_l` between the normal and the direction to the light):
+//! the shadow of an occluder stretches by `1 / cos_l` there, so the occluder that casts a shadow
+//! a pixel wide subtends that much less. The texel is matched to `f cos_l / r`, with `cos_l`
+//! clamped to at least [`MIN_COS_LIGHT`] (a surface lit at more of a slant than that gets no
+//! finer texels: its shadows rely on the border test and rays). A light whose pages exceed the
+//! memory budget gives up this refinement first (`cos_l` taken as 1), then its finest levels. A texel of level `k`
 //! subtends at most `2 / (PAGE 2^k)` radians (at the face centre: see
 //! [`LightMap::texel_angle`](crate::LightMap::texel_angle)). For texels no larger than
 //! `1 / detail` of the footprint, seen from the light,
 //!
-//! `2 / (PAGE 2^k) <= f / (r detail)  <=>  2^k >= 2 r detail / (PAGE d theta)`,
+//! `2 / (PAGE 2^k) <= f cos_l / (r detail)  <=>  2^k >= 2 r detail / (PAGE f cos_l)`,
 //!
-//! so the level is `k = ceil(log2(r / d * scale))` with `scale = 2 detail / (PAGE theta)`,
+//! so the level is `k = ceil(log2(r sqrt(cos_v) / (d cos_l) * scale))` with
+//! `scale = 2 detail / (PAGE theta)`,
 //! clamped to `[0, MAX_LEVEL]` ([`Resolution::level`]). The ceiling of the logarithm is read
 //! from the `f32`'s exponent and mantissa bits: exact, so that marking and classification (the
 //! same function of the same point) always agree.
@@ -56,6 +67,11 @@ use crate::map::{MAX_LEVEL, MapCoord, PAGE, PageKey, cube_coord};
 /// footprint plus the tile test's margin of 1.5 texels, rounded up.
 pub const MARGIN: f64 = 2.0;
 
+/// The least cosine between a receiver's normal and the direction to the light that
+/// [`Resolution::level`] refines for: a surface the light grazes more gets the texels of one at
+/// this slant (module docs).
+pub const MIN_COS_LIGHT: f32 = 1.0 / 16.0;
+
 /// How a frame picks the level of a receiver (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolution {
@@ -63,24 +79,50 @@ pub struct Resolution {
     pub eye: Vec3,
     /// `2 detail / (PAGE theta)`, `theta` the angle of one pixel.
     pub scale: f32,
-    /// Levels to coarsen every receiver by (a memory budget's doing), `>= 0`.
-    pub coarsen: u8,
+    /// The finest level allowed (a memory budget's doing): receivers that need finer texels
+    /// get this level's. [`MAX_LEVEL`] by default.
+    pub cap: u8,
+    /// The least `cos_l` refined for ([`MIN_COS_LIGHT`] by default; 1 refines none: the first
+    /// thing a memory budget gives up).
+    pub min_cos_light: f32,
 }
 
 impl Resolution {
     /// The resolution guide for a camera at `eye` whose pixels subtend `pixel_angle` radians,
     /// with texels `detail` times finer than a pixel's footprint.
     pub fn new(eye: Vec3, pixel_angle: f32, detail: f32) -> Self {
-        Self { eye, scale: 2.0 * detail / (PAGE as f32 * pixel_angle), coarsen: 0 }
+        Self {
+            eye,
+            scale: 2.0 * detail / (PAGE as f32 * pixel_angle),
+            cap: MAX_LEVEL,
+            min_cos_light: MIN_COS_LIGHT,
+        }
     }
 
-    /// The level a receiver at `p` needs for a light at `light` (module docs): the coarsest
-    /// whose texels are no larger than `1 / detail` of the pixel's footprint, then
-    /// [`Resolution::coarsen`] levels coarser; 0 for NaN input.
+    /// The level a receiver at `p`, whose surface's normal makes cosine `cos_view` with the
+    /// direction to the camera, needs for a light at `light` (module docs): the coarsest whose
+    /// texels are no larger than `1 / detail` of the pixel's footprint, then
+    /// capped at [`Resolution::cap`]; 0 for NaN input.
     #[inline]
-    pub fn level(&self, p: Vec3, light: Vec3) -> u8 {
-        let ratio = (p - light).length() / (p - self.eye).length() * self.scale;
-        ceil_log2(ratio).saturating_sub(self.coarsen).min(MAX_LEVEL)
+    pub fn level(&self, p: Vec3, n: Vec3, cos_view: f32, light: Vec3) -> u8 {
+        self.level_for(self.receiver(p, cos_view), p, n, light)
+    }
+
+    /// The part of [`Resolution::level`] that depends on the receiver alone (the same for
+    /// every light): `sqrt(cos_view) / d * scale`, `cos_view` clamped to `[1/16, 1]`.
+    #[inline]
+    pub fn receiver(&self, p: Vec3, cos_view: f32) -> f32 {
+        cos_view.abs().clamp(1.0 / 16.0, 1.0).sqrt() / (p - self.eye).length() * self.scale
+    }
+
+    /// [`Resolution::level`] from [`Resolution::receiver`]'s factor, for a receiver with unit
+    /// normal `n`: `r / max(cos_l, MIN_COS_LIGHT)` times the factor, `cos_l = |n . (L - p)| / r`.
+    #[inline]
+    pub fn level_for(&self, receiver: f32, p: Vec3, n: Vec3, light: Vec3) -> u8 {
+        let v = light - p;
+        let r = v.length();
+        let slant = (n.dot(v).abs() / r).max(self.min_cos_light);
+        ceil_log2(r / slant * receiver).min(self.cap).min(MAX_LEVEL)
     }
 }
 
@@ -88,7 +130,7 @@ impl Resolution {
 /// for infinity), exactly, from the bits.
 #[inline]
 pub fn ceil_log2(x: f32) -> u8 {
-    if !(x > 1.0) {
+    if x.is_nan() || x <= 1.0 {
         return 0;
     }
     if x.is_infinite() {
@@ -113,7 +155,8 @@ pub fn locate(dir: Vec3, level: u8) -> MapCoord {
 #[inline]
 pub fn pages_around(c: MapCoord, mut mark: impl FnMut(PageKey)) {
     let n = 1u32 << c.level.min(MAX_LEVEL);
-    let page = |v: f64| ((v / f64::from(PAGE)).floor().max(0.0) as u32).min(n - 1);
+    // Truncation is the floor here (the value is clamped to >= 0 first; NaN gives 0).
+    let page = |v: f64| ((v.max(0.0) / f64::from(PAGE)) as u32).min(n - 1);
     let (x0, x1) = (page(c.x - MARGIN), page(c.x + MARGIN));
     let (y0, y1) = (page(c.y - MARGIN), page(c.y + MARGIN));
     for py in y0..=y1 {
@@ -149,9 +192,17 @@ mod tests {
     #[test]
     fn level_grows_with_distance_from_the_light_and_shrinks_with_the_camera() {
         let r = Resolution::new(Vec3::ZERO, 2.0 / 480.0, 1.0);
-        let near = r.level(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0));
-        let far_light = r.level(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 100.0, 1.0));
-        let far_cam = r.level(Vec3::new(0.0, 0.0, 10.0), Vec3::new(0.0, 1.0, 10.0));
+        let up = Vec3::Y;
+        let near = r.level(Vec3::new(0.0, 0.0, 1.0), up, 1.0, Vec3::new(0.0, 1.0, 1.0));
+        let far_light = r.level(Vec3::new(0.0, 0.0, 1.0), up, 1.0, Vec3::new(0.0, 100.0, 1.0));
+        let far_cam = r.level(Vec3::new(0.0, 0.0, 10.0), up, 1.0, Vec3::new(0.0, 1.0, 10.0));
+        // A surface slanted to the camera needs coarser texels, at most 2 levels (a factor 4).
+        let slant = r.level(Vec3::new(0.0, 0.0, 1.0), up, 0.2, Vec3::new(0.0, 100.0, 1.0));
+        let grazing = r.level(Vec3::new(0.0, 0.0, 1.0), up, 0.0, Vec3::new(0.0, 100.0, 1.0));
+        assert!(slant < far_light && grazing == far_light - 2, "{slant} {grazing} {far_light}");
+        // One the light grazes needs finer ones, at most 4 levels (a factor 16).
+        let lit_slant = r.level(Vec3::new(0.0, 0.0, 1.0), up, 1.0, Vec3::new(100.0, 0.0, 1.0));
+        assert_eq!(lit_slant, far_light + 4, "{lit_slant} {far_light}");
         assert!(far_light > near && far_cam < near, "{near} {far_light} {far_cam}");
         // A texel at the level is no larger than the footprint: 2 / (PAGE 2^k) <= f / r.
         let (d, dist) = (1.0f32, 100.0f32);
@@ -159,9 +210,9 @@ mod tests {
         assert!(2.0 / (PAGE as f32 * 2f32.powi(k.into())) <= d * 2.0 / 480.0 / dist);
         assert!(2.0 / (PAGE as f32 * 2f32.powi(i32::from(k) - 1)) > d * 2.0 / 480.0 / dist);
         // Degenerate input: no panic, a level in range.
-        assert!(r.level(Vec3::ZERO, Vec3::ZERO) <= MAX_LEVEL);
-        assert!(r.level(Vec3::NAN, Vec3::ONE) <= MAX_LEVEL);
-        assert_eq!(r.level(Vec3::ONE, Vec3::splat(1e30)), MAX_LEVEL);
+        assert!(r.level(Vec3::ZERO, up, 1.0, Vec3::ZERO) <= MAX_LEVEL);
+        assert!(r.level(Vec3::NAN, up, f32::NAN, Vec3::ONE) <= MAX_LEVEL);
+        assert_eq!(r.level(Vec3::ONE, up, 1.0, Vec3::splat(1e30)), MAX_LEVEL);
     }
 
     #[test]
@@ -172,9 +223,13 @@ mod tests {
             pages_around(c, |k| got.push(k));
             for dx in [-MARGIN, 0.0, MARGIN] {
                 for dy in [-MARGIN, 0.0, MARGIN] {
-                    let (px, py) = (((x + dx).max(0.0) / 64.0) as u32, ((y + dy).max(0.0) / 64.0) as u32);
+                    let page = f64::from(PAGE);
+                    let (px, py) = (((x + dx).max(0.0) / page) as u32, ((y + dy).max(0.0) / page) as u32);
                     let (px, py) = (px.min(3), py.min(3));
-                    assert!(got.contains(&PageKey { level: 2, face: 2, py, px }), "({x}, {y}) + ({dx}, {dy})");
+                    assert!(
+                        got.contains(&PageKey { level: 2, face: 2, py, px }),
+                        "({x}, {y}) + ({dx}, {dy})"
+                    );
                 }
             }
             assert!(got.len() <= 4);

@@ -1,0 +1,192 @@
+//! Paged light maps ([`LightMap::build_pages`]): each page drawn alone through its own
+//! projection agrees with the whole face, pages are independent of which others are drawn,
+//! pages not drawn read `ABSENT`, and the fine levels place occluders a whole map of the
+//! rasterizer's largest size cannot resolve.
+
+use glam::{DVec3, Vec3};
+use hyrt_shadowmap::{
+    ABSENT, EMPTY, LightMap, MapKind, MapOptions, PAGE, PageKey,
+    classify::{Classifier, Decision, triangle_planes},
+    paged,
+};
+use hyrt_testkit::Rng;
+
+/// Random triangles in a shell around the origin (the light), of all sizes: some spanning many
+/// pages, some smaller than a texel.
+fn scene(seed: u64, n: usize) -> Vec<[Vec3; 3]> {
+    let mut rng = Rng(seed);
+    let mut v = || DVec3::new(rng.f64(), rng.f64(), rng.f64()) * 2.0 - 1.0;
+    (0..n)
+        .map(|i| {
+            let c = v().normalize() * (2.0 + 3.0 * (i % 7) as f64);
+            let size = [2.0, 0.3, 0.02][i % 3];
+            [c + v() * size, c + v() * size, c + v() * size].map(|p| p.as_vec3())
+        })
+        .collect()
+}
+
+fn opts(resolution: u32) -> MapOptions {
+    MapOptions { kind: MapKind::Cube, resolution, tess_texels: 8.0 }
+}
+
+/// Every page of `level` on every face.
+fn all_pages(level: u8) -> Vec<PageKey> {
+    let n = 1u32 << level;
+    let mut out = Vec::new();
+    for face in 0..6 {
+        for py in 0..n {
+            for px in 0..n {
+                out.push(PageKey { level, face, py, px });
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn pages_agree_with_the_whole_face_at_the_same_resolution() {
+    // Level 2 has PAGE << 2 texels per side: the whole map of that resolution is the same grid.
+    let tris = scene(7, 600);
+    let light = Vec3::ZERO;
+    let res = PAGE << 2;
+    let whole = LightMap::build(&tris, light, &opts(res), &[true; 6]);
+    let paged = LightMap::build_pages(&tris, light, &opts(0), &all_pages(2), &[]);
+    assert!(paged.is_paged() && !whole.is_paged());
+    assert_eq!(paged.page_count(), 6 * 16);
+    let (mut texels, mut same, mut covered) = (0u64, 0u64, 0u64);
+    for face in 0..6u8 {
+        for y in 0..res {
+            for x in 0..res {
+                let (a, b) = (whole.id(face, x, y), paged.id_at(2, face, x, y));
+                texels += 1;
+                covered += u64::from(a != EMPTY);
+                if a == b {
+                    same += 1;
+                    if a != EMPTY {
+                        // Same triangle, same depth (the plane's, to a few ulps).
+                        let (da, db) = (whole.depth(face, x, y), paged.depth_at(2, face, x, y));
+                        assert!((da - db).abs() <= 1e-5 * da, "({face}, {x}, {y}): {da} vs {db}");
+                    }
+                }
+            }
+        }
+    }
+    println!("{same} of {texels} texels agree ({covered} covered)");
+    // Each page snaps its vertices in its own coordinates: only texel centres within a
+    // snapping step (1/256 texel) of an edge may change hands.
+    assert!(covered > texels / 4, "the scene covers too little: {covered}");
+    assert!((texels - same) * 1000 < texels, "{} of {texels} texels differ", texels - same);
+}
+
+#[test]
+fn a_page_is_the_same_whichever_others_are_drawn_and_merges_are_exact() {
+    let tris = scene(11, 400);
+    let light = Vec3::new(0.1, -0.2, 0.05);
+    let pages = all_pages(3);
+    let (even, odd): (Vec<PageKey>, Vec<PageKey>) =
+        pages.iter().partition(|k| (k.px + k.py + u32::from(k.face)) % 2 == 0);
+    let full = LightMap::build_pages(&tris, light, &opts(0), &pages, &[]);
+    let mut merged = LightMap::build_pages(&tris, light, &opts(0), &even, &[]);
+    let part = merged.clone();
+    merged.merge(LightMap::build_pages(&tris, light, &opts(0), &odd, &[]));
+    assert_eq!(merged.pages(), full.pages());
+    let res = PAGE << 3;
+    let mut absent = 0;
+    for face in 0..6u8 {
+        for y in (0..res).step_by(3) {
+            for x in (0..res).step_by(3) {
+                assert_eq!(merged.id_at(3, face, x, y), full.id_at(3, face, x, y));
+                assert_eq!(merged.depth_at(3, face, x, y).to_bits(), full.depth_at(3, face, x, y).to_bits());
+                let k = PageKey { level: 3, face, py: y / PAGE, px: x / PAGE };
+                if part.has_page(k) {
+                    assert_eq!(part.id_at(3, face, x, y), full.id_at(3, face, x, y));
+                } else {
+                    assert_eq!(part.id_at(3, face, x, y), ABSENT);
+                    assert_eq!(part.depth_at(3, face, x, y), f32::INFINITY);
+                    absent += 1;
+                }
+            }
+        }
+    }
+    assert!(absent > 0);
+    // Levels not drawn at all read ABSENT too; outside the face, EMPTY.
+    assert_eq!(full.id_at(5, 0, 10, 10), ABSENT);
+    assert_eq!(full.id_at(3, 0, res, 0), EMPTY);
+    // Eviction keeps what it keeps, bit for bit.
+    let mut kept = full.clone();
+    kept.retain_pages(|k| k.face == 2);
+    assert_eq!(kept.page_count(), 64);
+    for y in 0..res {
+        assert_eq!(kept.id_at(3, 2, 17, y), full.id_at(3, 2, 17, y));
+        assert_eq!(kept.id_at(3, 1, 17, y), ABSENT);
+    }
+    assert!(kept.memory_bytes() < full.memory_bytes() / 5);
+}
+
+#[test]
+fn points_whose_pages_were_not_drawn_are_left_to_rays() {
+    // A floor under a small occluder; only the pages around one point are drawn.
+    let q = |y: f32, r: f32| {
+        let v = |x: f32, z: f32| Vec3::new(x, y, z);
+        [[v(-r, -r), v(r, r), v(r, -r)], [v(-r, -r), v(-r, r), v(r, r)]]
+    };
+    let tris: Vec<[Vec3; 3]> = q(0.0, 4.0).into_iter().chain(q(1.0, 0.25)).collect();
+    let planes = triangle_planes(&tris);
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    let level = 4;
+    let marked = |p: Vec3| {
+        let mut keys = Vec::new();
+        paged::pages_around(paged::locate(p - light, level), |k| keys.push(k));
+        keys
+    };
+    let under = Vec3::new(0.0, 0.0, 0.1);
+    let map = LightMap::build_pages(&tris, light, &opts(0), &marked(under), &[]);
+    let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0 };
+    let lk = cls.classify_at(under, 1, cls.locate_at(under, level));
+    assert_eq!((lk.decision, lk.map_border), (Decision::Shadow, false));
+    assert!(lk.hint == 2 || lk.hint == 3);
+    // Far from the drawn pages: undecided, no hint (a ray decides).
+    let far = Vec3::new(3.5, 0.0, 3.5);
+    let lk = cls.classify_at(far, 0, cls.locate_at(far, level));
+    assert!(lk.map_border && lk.hint == EMPTY, "{lk:?}");
+    // At a level with no page: the same.
+    let lk = cls.classify_at(under, 1, cls.locate_at(under, level + 1));
+    assert!(lk.map_border, "{lk:?}");
+}
+
+#[test]
+fn fine_levels_resolve_a_thin_occluder_far_from_the_light() {
+    // A light 1000 units away; a rail 0.01 wide (1e-5 radians from the light) over a floor.
+    // A whole face of 2048 texels has texels of about 1e-3 radians: the rail falls between
+    // texel centres. At level 12 (PAGE << 12 = 262144 texels), 2 / 262144 = 7.6e-6 radians.
+    let light = Vec3::new(0.0, 1000.0, 0.0);
+    let rail = |x0: f32, x1: f32, y: f32| {
+        let v = |x: f32, z: f32| Vec3::new(x, y, z);
+        [[v(x0, -2.0), v(x1, 2.0), v(x1, -2.0)], [v(x0, -2.0), v(x0, 2.0), v(x1, 2.0)]]
+    };
+    let tris: Vec<[Vec3; 3]> = rail(-3.0, 3.0, 0.0).into_iter().chain(rail(-0.005, 0.005, 1.0)).collect();
+    let planes = triangle_planes(&tris);
+    // Points under the rail, across its shadow.
+    let shadowed = |map: &LightMap, level: u8| -> usize {
+        let cls = Classifier { map, planes: &planes, bias: 1.0, point_error: 0.0 };
+        (0..20)
+            .filter(|&i| {
+                let p = Vec3::new(-0.0045 + 0.009 * i as f32 / 19.0, 0.0, 0.3);
+                let lk = cls.classify_at(p, 0, cls.locate_at(p, level));
+                lk.decision == Decision::Shadow
+            })
+            .count()
+    };
+    let whole = LightMap::build(&tris, light, &opts(2048), &[true; 6]);
+    let level = 12;
+    let mut keys = Vec::new();
+    for i in 0..20 {
+        let p = Vec3::new(-0.0045 + 0.009 * i as f32 / 19.0, 0.0, 0.3);
+        paged::pages_around(paged::locate(p - light, level), |k| keys.push(k));
+    }
+    let paged_map = LightMap::build_pages(&tris, light, &opts(0), &keys, &[]);
+    let (w, p) = (shadowed(&whole, 0), shadowed(&paged_map, level));
+    println!("shadowed points: whole 2048 {w} of 20, paged level {level} {p} of 20");
+    assert_eq!(p, 20);
+    assert!(w < 20);
+}

@@ -236,11 +236,32 @@ impl Choice for VplFormat {
     const NAMES: &'static [&'static str] = &[VplFormat::Planes.name(), VplFormat::Depth16.name()];
 }
 
+choice! {
+    /// How the point lights' maps are laid out ([`ShadowOptions::light_maps`]).
+    #[derive(Default)]
+    pub enum LightMaps {
+        /// Only the pages (32 x 32 texels) that the frame's receivers fall on, each at the
+        /// resolution its receivers need (`hyrt_shadowmap::paged`). Cube maps only: paraboloid
+        /// maps are drawn whole.
+        #[default]
+        Paged = "paged",
+        /// Every texel of each face that a receiver falls on, at `--shadow-map-res`.
+        Whole = "whole",
+    }
+}
+
 /// The knobs of map-based shadows (ignored by `Shadows::Rays`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowOptions {
-    /// Map kind, resolution, paraboloid tessellation.
+    /// Map kind, resolution (of whole maps), paraboloid tessellation.
     pub map: MapOptions,
+    /// Paged maps (resolution matched to the receivers) or whole faces.
+    pub light_maps: LightMaps,
+    /// Paged maps: texels per pixel footprint (per side) that each receiver asks for.
+    pub map_detail: f32,
+    /// Paged maps: most megabytes of pages per light; a light whose receivers ask for more
+    /// gets coarser levels, one at a time, until it fits.
+    pub map_budget: u32,
     /// Depth margin in texel footprints (see `hyrt_shadowmap::classify`).
     pub bias: f32,
     pub borders: Borders,
@@ -256,6 +277,9 @@ impl Default for ShadowOptions {
     fn default() -> Self {
         Self {
             map: MapOptions { resolution: 2048, ..MapOptions::default() },
+            light_maps: LightMaps::Paged,
+            map_detail: 1.5,
+            map_budget: 16,
             bias: 1.0,
             borders: Borders::MapSpace,
             dilate: 0,
@@ -467,6 +491,27 @@ pub const KNOBS: &[Knob] = &[
         "Light map resolution: texels per side of each face.",
         count 1..=16384,
         shadow.map.resolution
+    ),
+    knob!(
+        "light-maps",
+        "LAYOUT",
+        "Light maps: `paged` (only the 32x32-texel pages that receivers fall on, at the resolution each needs; cube maps) or `whole` (every texel of the faces receivers fall on, at --shadow-map-res).",
+        choice LightMaps,
+        shadow.light_maps
+    ),
+    knob!(
+        "map-detail",
+        "D",
+        "Paged light maps: texels per pixel footprint (per side) that each receiver asks for.",
+        non_negative,
+        shadow.map_detail
+    ),
+    knob!(
+        "map-budget",
+        "MB",
+        "Paged light maps: most megabytes of pages per light (coarser levels beyond it).",
+        count 1..=65536,
+        shadow.map_budget
     ),
     knob!("bias", "B", "Depth margin of map decisions, in texel footprints.", non_negative, shadow.bias),
     knob!(

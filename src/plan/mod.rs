@@ -74,10 +74,21 @@ impl Plan {
                 hyrt_shadowmap::MapKind::Cube => "cube",
                 hyrt_shadowmap::MapKind::Paraboloid => "dual-paraboloid",
             };
-            let maps = format!(
-                "{kind} maps of {n}x{n} per face, only faces that camera hits fall on, built once and cached",
-                n = sh.map.resolution
-            );
+            let paged = sh.light_maps == crate::options::LightMaps::Paged
+                && sh.map.kind == hyrt_shadowmap::MapKind::Cube;
+            let maps = if paged {
+                format!(
+                    "paged {kind} maps: only the {p}x{p}-texel pages that camera hits fall on, each at the level its receivers need ({d} texels per pixel footprint, at most {b} MB per light), cached and extended as views move",
+                    p = hyrt_shadowmap::PAGE,
+                    d = sh.map_detail,
+                    b = sh.map_budget
+                )
+            } else {
+                format!(
+                    "{kind} maps of {n}x{n} per face, only faces that camera hits fall on, built once and cached",
+                    n = sh.map.resolution
+                )
+            };
             match opts.shadows {
                 Shadows::Rays => {
                     plan.add(false, Pass::MapBuild, "shadows by rays: no light maps".into());

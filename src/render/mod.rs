@@ -38,7 +38,9 @@ pub use surface::SurfaceHit;
 
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
 
-pub use crate::options::{Borders, Indirect, MirrorShadows, Options, ShadowOptions, Shadows, Visibility};
+pub use crate::options::{
+    Borders, Indirect, LightMaps, MirrorShadows, Options, ShadowOptions, Shadows, Visibility,
+};
 
 /// Per-frame statistics.
 #[derive(Clone, Debug, Default)]
@@ -189,8 +191,14 @@ impl<'a> Renderer<'a> {
     pub fn set_options(&mut self, options: Options) -> Vec<&'static str> {
         let old = self.options;
         let mut dropped = Vec::new();
-        if options.shadow.map != old.shadow.map {
-            self.drop_light_maps(options.shadow.map.kind != old.shadow.map.kind);
+        let (a, b) = (&old.shadow, &options.shadow);
+        if a.map != b.map
+            || a.light_maps != b.light_maps
+            || a.map_detail != b.map_detail
+            || a.map_budget != b.map_budget
+        {
+            // Which pages (or faces) the view needs depends on all of these.
+            self.drop_light_maps(true);
             dropped.push("light maps");
         }
         let (a, b) = (&old.indirect_opts, &options.indirect_opts);

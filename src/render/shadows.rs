@@ -29,16 +29,17 @@ use std::time::Instant;
 
 use glam::Vec3;
 use hyrt_shadowmap::{
-    EMPTY, LightMap,
+    EMPTY, LightMap, MapKind, PageKey,
     classify::Decision,
-    classify::{Classifier, Hull, Plane},
+    classify::{Classifier, Hull, Lookup, Plane},
+    paged::{self, Resolution, pages_around},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::gather::ShadePoint;
-use super::{Borders, FrameStats, MirrorShadows, Renderer, Shadows, SurfaceHit};
+use super::{Borders, FrameStats, LightMaps, MirrorShadows, Renderer, Shadows, SurfaceHit};
 
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
@@ -125,15 +126,57 @@ pub fn light_geometry(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32
 #[derive(Default)]
 pub(crate) struct MapCache {
     maps: Mutex<Vec<Option<Arc<LightMap>>>>,
-    /// Per light and face, whether a camera hit falls on it: a renderer's scene and camera are
-    /// fixed, so this is computed on the first frame only.
-    needed: std::sync::OnceLock<Vec<bool>>,
+    /// What the camera hits need of the maps: a renderer's scene and camera are fixed, so this
+    /// is computed on the first frame only.
+    needed: std::sync::OnceLock<Needs>,
     /// Lights whose map was dropped because they moved ([`Renderer::set_light`]), until the
     /// next frame builds it again (its decision says why).
     moved: Mutex<Vec<bool>>,
     /// Buffers of the last frame, reused (allocating them afresh costs page faults).
     scratch: Mutex<ShadowBuffers>,
 }
+
+/// What a view's camera hits need of the light maps.
+#[derive(Debug, Default)]
+pub(crate) struct Needs {
+    /// Per light and face (light-major), whether a camera hit the light faces falls on it.
+    faces: Vec<bool>,
+    /// Paged maps: per light, the pages the camera hits fall on (sorted), and the level guide
+    /// they were marked with (empty for whole maps).
+    pages: Vec<Vec<PageKey>>,
+    resolution: Vec<Resolution>,
+}
+
+/// The level guide of paged maps for `camera` (`hyrt_shadowmap::paged`): a pixel subtends
+/// `2 tan(fov_y / 2) / height` radians at the image centre. A frame's guide for light `l` is
+/// this one capped at [`LightStats::level_cap`].
+pub fn resolution_guide(camera: &crate::camera::CameraRays, shadow: &super::ShadowOptions) -> Resolution {
+    let pixel = 2.0 * camera.tan_y / camera.height.max(1) as f32;
+    Resolution::new(camera.eye, pixel, shadow.map_detail)
+}
+
+/// What the map-build pass made for a frame.
+struct FrameMaps {
+    /// Per light, its map.
+    maps: Vec<Arc<LightMap>>,
+    /// Maps built or extended.
+    built: u32,
+    /// Per light, what was done and why.
+    decisions: Vec<FrameDecision>,
+    /// Paged maps: per light, the pages in use and those drawn for this frame.
+    page_counts: Vec<[u32; 2]>,
+}
+
+/// Level caps of paged maps marked in one pass over the camera hits, for lights whose pages do
+/// not fit the budget at their own levels ([`Renderer::needs`]).
+const COARSER: usize = 3;
+
+/// Bytes of one page of a light map: ids and distances, and its region summaries by triangle
+/// and by group.
+const PAGE_BYTES: usize = {
+    let texels = (hyrt_shadowmap::PAGE * hyrt_shadowmap::PAGE) as usize;
+    texels * 8 + texels / 64 * 8
+};
 
 /// Per-light classification counts of one frame (camera hits only).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -148,6 +191,15 @@ pub struct LightStats {
     pub by_tile: u64,
     /// Map faces drawn for this light (cube: of 6, paraboloid: of 2).
     pub faces_drawn: u32,
+    /// Paged maps: the pages this frame's camera hits read, those of them drawn for this
+    /// frame (the others were reused), and the pages the map holds.
+    pub pages_used: u32,
+    pub pages_drawn: u32,
+    pub pages_held: u32,
+    /// Paged maps: the finest level in use, and the finest the memory budget allowed
+    /// ([`hyrt_shadowmap::MAX_LEVEL`] when it did not bind).
+    pub finest_level: u8,
+    pub level_cap: u8,
     /// Memory of the light's map (ids and distances), in bytes.
     pub map_bytes: u64,
     /// With `Options::check_visibility`: map decisions that a plain shadow ray contradicts.
@@ -259,6 +311,8 @@ pub struct Shadowing<'r> {
     pub bufs: ShadowBuffers,
     pub lights: Vec<LightStats>,
     planes: &'r [Plane],
+    /// Paged maps: per light, how a point picks its level (empty for whole maps).
+    resolution: Vec<Resolution>,
     /// Per light, the map's lit and shadowed decisions (before the border rays), and how many
     /// of them were made per tile.
     map_counts: Vec<[u64; 3]>,
@@ -287,6 +341,138 @@ impl Renderer<'_> {
         let w = self.scene.settings.width.max(1) as usize;
         let hit = gbuffer[i].as_ref().filter(|h| self.needs_light(h.tri))?;
         Some(SurfaceHit::new(self.scene, hit, self.camera_ray((i % w) as u32, (i / w) as u32).dir))
+    }
+
+    /// Whether the light maps are paged: `LightMaps::Paged` with cube maps.
+    pub(crate) fn paged_maps(&self) -> bool {
+        let o = &self.options.shadow;
+        o.light_maps == LightMaps::Paged && o.map.kind == MapKind::Cube
+    }
+
+    /// The level guide of paged maps for this camera (`hyrt_shadowmap::paged`): a pixel
+    /// subtends `2 tan(fov_y / 2) / height` radians at the image centre.
+    fn resolution_guide(&self) -> Resolution {
+        resolution_guide(&self.camera, &self.options.shadow)
+    }
+
+    /// What the camera hits of `gbuffer` need of the maps: per light the faces they fall on,
+    /// and for paged maps the pages; a light whose pages exceed the budget has its finest
+    /// levels capped, a level at a time, until they fit (the receivers that need the finest
+    /// texels give them up first; the others keep theirs).
+    fn needs(&self, gbuffer: &[Option<Hit>]) -> Needs {
+        if !self.paged_maps() {
+            return Needs { faces: self.needed_faces(gbuffer), ..Needs::default() };
+        }
+        let nl = self.lights.len();
+        let budget = (self.options.shadow.map_budget as usize * (1 << 20)) / PAGE_BYTES;
+        let mut resolution = vec![self.resolution_guide(); nl];
+        let mut pages = vec![Vec::new(); nl];
+        // Most lights fit at their own levels: mark those alone first; then, for the lights
+        // that did not fit, without the refinement for grazing light; then several caps at once.
+        let mut todo: Vec<usize> = Vec::new();
+        let marked = self.mark_pages(gbuffer, &(0..nl).collect::<Vec<_>>(), &resolution, 1);
+        for (l, sets) in marked.into_iter().enumerate() {
+            let set = sets.into_iter().next().unwrap_or_default();
+            if set.len() <= budget {
+                pages[l] = set;
+            } else {
+                resolution[l].min_cos_light = 1.0;
+                todo.push(l);
+            }
+        }
+        let mut count = 1;
+        while !todo.is_empty() {
+            let marked = self.mark_pages(gbuffer, &todo, &resolution, count);
+            let mut next = Vec::new();
+            for (&l, sets) in todo.iter().zip(marked) {
+                let cap = resolution[l].cap;
+                // The least capping that fits; else the finest level of the last one tried
+                // less one, next time round (unless at level 0 already).
+                let fit = sets.iter().position(|p| p.len() <= budget);
+                let c = fit.unwrap_or(sets.len() - 1);
+                let finest = sets[c].iter().map(|k| k.level).max().unwrap_or(0);
+                resolution[l].cap = cap.saturating_sub(c as u8);
+                if fit.is_none() && finest > 0 {
+                    resolution[l].cap = finest - 1;
+                    next.push(l);
+                } else {
+                    pages[l] = sets.into_iter().nth(c).unwrap_or_default();
+                }
+            }
+            count = COARSER;
+            todo = next;
+        }
+        let nf = LightMap::face_count(MapKind::Cube);
+        let mut faces = vec![false; nl * nf];
+        for (l, p) in pages.iter().enumerate() {
+            p.iter().for_each(|k| faces[l * nf + usize::from(k.face)] = true);
+        }
+        Needs { faces, pages, resolution }
+    }
+
+    /// For each light `l` of `lights`, the pages (sorted) under the camera hits that face it
+    /// ([`pages_around`]) at the levels `resolution[l]` gives them, and with the cap one, two,
+    /// ... `count - 1` levels lower: one pass over the hits for several budgets.
+    fn mark_pages(
+        &self,
+        gbuffer: &[Option<Hit>],
+        lights: &[usize],
+        resolution: &[Resolution],
+        count: usize,
+    ) -> Vec<Vec<Vec<PageKey>>> {
+        let w = self.scene.settings.width.max(1) as usize;
+        let rows: Vec<Vec<Vec<Vec<PageKey>>>> = (0..gbuffer.len().div_ceil(w))
+            .into_par_iter()
+            .map(|y| {
+                let mut marks: Vec<Vec<Vec<PageKey>>> = vec![vec![Vec::new(); count]; lights.len()];
+                for i in y * w..((y + 1) * w).min(gbuffer.len()) {
+                    let Some(s) = self.shading_point(gbuffer, i) else { continue };
+                    let tri = &self.scene.positions[s.tri as usize];
+                    // The receiver's factor is the same for every light.
+                    let recv = resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
+                    for (k, &l) in lights.iter().enumerate() {
+                        let light = &self.lights[l];
+                        if facing(&s, light, tri).is_none() {
+                            continue;
+                        }
+                        let g = &resolution[l];
+                        let level = g.level_for(recv, s.p, s.ng, light.position);
+                        let mut c = paged::locate(s.p - light.position, level);
+                        for (j, out) in marks[k].iter_mut().enumerate() {
+                            let lv = level.min(g.cap.saturating_sub(j as u8));
+                            if lv != c.level {
+                                c = paged::locate(s.p - light.position, lv);
+                            }
+                            // Neighbouring pixels mostly mark the same pages: skip the repeats.
+                            pages_around(c, |key| {
+                                if !out.iter().rev().take(4).any(|&o| o == key) {
+                                    out.push(key);
+                                }
+                            });
+                        }
+                    }
+                }
+                marks.iter_mut().flatten().for_each(|m| {
+                    m.sort_unstable();
+                    m.dedup();
+                });
+                marks
+            })
+            .collect();
+        (0..lights.len())
+            .into_par_iter()
+            .map(|k| {
+                (0..count)
+                    .map(|j| {
+                        let mut all: Vec<PageKey> =
+                            rows.iter().flat_map(|r| r[k][j].iter().copied()).collect();
+                        all.sort_unstable();
+                        all.dedup();
+                        all
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// Per light and face (light-major), whether a camera hit the light faces falls on it.
@@ -323,11 +509,15 @@ impl Renderer<'_> {
     /// extended) if the cache lacks a face. Returns the maps, how many were (re)built, and per
     /// light what was done and why. A light that no camera hit is in front of gets an empty
     /// map (no face drawn, nothing allocated): it is neither built nor counted.
-    fn light_maps(&self, gbuffer: &[Option<Hit>]) -> (Vec<Arc<LightMap>>, u32, Vec<FrameDecision>) {
+    fn light_maps(&self, gbuffer: &[Option<Hit>]) -> FrameMaps {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
         let lights = &self.lights;
-        let needed = self.maps.needed.get_or_init(|| self.needed_faces(gbuffer));
+        let needed = self.maps.needed.get_or_init(|| self.needs(gbuffer));
+        let paged = self.paged_maps();
+        let budget = (self.options.shadow.map_budget as usize * (1 << 20)) / PAGE_BYTES;
+        // Paged maps: per light, the pages in use and those drawn for this frame.
+        let mut page_counts = vec![[0u32; 2]; lights.len()];
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
         cache.resize(lights.len(), None);
         let mut moved = self.maps.moved.lock().unwrap_or_else(|e| e.into_inner());
@@ -335,7 +525,7 @@ impl Renderer<'_> {
         let mut built = 0;
         let mut decisions = Vec::with_capacity(lights.len());
         for (l, light) in lights.iter().enumerate() {
-            let want = &needed[l * nf..(l + 1) * nf];
+            let want = &needed.faces[l * nf..(l + 1) * nf];
             let have = cache[l].as_ref().map(|m| m.faces_drawn().to_vec());
             let missing = have.as_ref().is_none_or(|h| want.iter().zip(h).any(|(w, h)| *w && !*h));
             let wanted = want.iter().filter(|&&w| w).count();
@@ -353,13 +543,90 @@ impl Renderer<'_> {
                 ));
                 moved[l] = false;
                 if have.is_none() {
-                    cache[l] = Some(Arc::new(LightMap::build(
-                        &self.scene.positions,
-                        light.position,
-                        &self.options.shadow.map,
-                        &[],
-                    )));
+                    let empty = if paged {
+                        LightMap::build_pages(
+                            &self.scene.positions,
+                            light.position,
+                            &self.options.shadow.map,
+                            &[],
+                            &[],
+                        )
+                    } else {
+                        LightMap::build(&self.scene.positions, light.position, &self.options.shadow.map, &[])
+                    };
+                    cache[l] = Some(Arc::new(empty));
                 }
+                continue;
+            }
+            if paged {
+                let want = &needed.pages[l];
+                let old = cache[l].as_ref().filter(|m| m.is_paged());
+                let missing: Vec<PageKey> =
+                    want.iter().copied().filter(|&k| old.is_none_or(|m| !m.has_page(k))).collect();
+                let held = old.map_or(0, |m| m.page_count());
+                let fresh = old.is_none();
+                // Over the budget: first drop the pages this view does not read (they are drawn
+                // again if a later view needs them).
+                let evicted = if !fresh && held + missing.len() > budget {
+                    let keep: std::collections::HashSet<PageKey> = want.iter().copied().collect();
+                    if let Some(m) = cache[l].as_mut() {
+                        Arc::make_mut(m).retain_pages(|k| keep.contains(&k));
+                    }
+                    held - (want.len() - missing.len())
+                } else {
+                    0
+                };
+                let levels =
+                    (want.first().map_or(0, |k| k.level), want.iter().map(|k| k.level).max().unwrap_or(0));
+                let coarsened = match needed.resolution[l].cap {
+                    hyrt_shadowmap::MAX_LEVEL => String::new(),
+                    c => format!(", capped at level {c} to fit {} MB", self.options.shadow.map_budget),
+                };
+                let in_use =
+                    format!("{} pages in use, levels {}..={}{coarsened}", want.len(), levels.0, levels.1);
+                if missing.is_empty() {
+                    page_counts[l] = [want.len() as u32, 0];
+                    let reason =
+                        format!("map reused from an earlier frame, not rebuilt: no page drawn ({in_use})");
+                    decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
+                    continue;
+                }
+                let t = Instant::now();
+                let was_moved = std::mem::take(&mut moved[l]);
+                let draw = if fresh { want.as_slice() } else { missing.as_slice() };
+                let map = LightMap::build_pages(
+                    &self.scene.positions,
+                    light.position,
+                    &self.options.shadow.map,
+                    draw,
+                    self.plane_groups().0,
+                );
+                page_counts[l] = [want.len() as u32, draw.len() as u32];
+                let (done, why) = match (&mut cache[l], fresh) {
+                    (Some(m), false) => {
+                        Arc::make_mut(m).merge(map);
+                        let evicted = match evicted {
+                            0 => String::new(),
+                            e => format!(", {e} unused page(s) dropped for the budget"),
+                        };
+                        (
+                            Cache::Extended,
+                            format!(
+                                "map extended: {} new page(s) drawn for this view, {} reused{evicted}",
+                                draw.len(),
+                                want.len() - draw.len()
+                            ),
+                        )
+                    }
+                    (slot, _) => {
+                        *slot = Some(Arc::new(map));
+                        let why = if was_moved { "map rebuilt: the light moved" } else { "map built" };
+                        (Cache::Built, format!("{why}: {} page(s) drawn", draw.len()))
+                    }
+                };
+                built += 1;
+                let reason = format!("{why} ({in_use}) in {:.1} ms", super::ms(t));
+                decisions.push(FrameDecision::new(what, true, reason).with_cache(done));
                 continue;
             }
             // The light is in use either way; the reason says whether its map was rebuilt.
@@ -406,7 +673,12 @@ impl Renderer<'_> {
                 decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
             }
         }
-        (cache.iter().map(|m| m.clone().expect("built above")).collect(), built, decisions)
+        FrameMaps {
+            maps: cache.iter().map(|m| m.clone().expect("built above")).collect(),
+            built,
+            decisions,
+            page_counts,
+        }
     }
 
     /// The map-build, classify and borders passes for the camera hits (module docs); the
@@ -427,7 +699,18 @@ impl Renderer<'_> {
         let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
 
         let t = Instant::now();
-        let (maps, built, decisions) = self.light_maps(gbuffer);
+        let FrameMaps { maps, built, decisions, page_counts } = self.light_maps(gbuffer);
+        let resolution: Vec<Resolution> = if self.paged_maps() {
+            self.maps.needed.get().map_or_else(Vec::new, |n| n.resolution.clone())
+        } else {
+            Vec::new()
+        };
+        // The level of a point for light `l` (its receiver factor `recv`): its page level for
+        // paged maps, 0 otherwise.
+        let receiver = |s: &SurfaceHit| resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
+        let level = |l: usize, recv: f32, s: &SurfaceHit| {
+            resolution.get(l).map_or(0, |r| r.level_for(recv, s.p, s.ng, lights[l].position))
+        };
         stats.record(super::Pass::MapBuild, t);
         stats.maps_built = built;
         stats.decisions.extend(decisions);
@@ -454,10 +737,14 @@ impl Renderer<'_> {
             // point's location (prefetching its texels, so that the tile's cache misses
             // overlap) and decision, then the points' direct light from those decisions.
             let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
+            // Per point of the tile, its receiver factor and (per light in turn) its level.
+            let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
+            let mut levels: Vec<u8> = Vec::with_capacity(TILE * TILE);
             let mut located = Vec::with_capacity(TILE * TILE);
             let mut sides = PlaneSides::new();
             for x0 in (0..w).step_by(TILE) {
                 tile.clear();
+                recv.clear();
                 let x1 = (x0 + TILE).min(w);
                 for y in 0..rows {
                     for j in y * w + x0..y * w + x1 {
@@ -477,6 +764,7 @@ impl Renderer<'_> {
                                 bits[l / 8] |= 1 << (l % 8);
                             }
                         }
+                        recv.push(receiver(&s));
                         tile.push((j, s));
                     }
                 }
@@ -491,9 +779,16 @@ impl Renderer<'_> {
                 });
                 for (l, c) in cls.iter().enumerate() {
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    levels.clear();
+                    levels.extend(tile.iter().zip(&recv).map(|((_, s), &f)| level(l, f, s)));
                     let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
                         let own = tile[0].1.tri;
-                        c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)))
+                        // The tile test reads one level: a tile whose points need different
+                        // levels is decided point by point.
+                        if levels.iter().any(|&v| v != levels[0]) {
+                            return Hull::Unknown;
+                        }
+                        c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)), levels[0])
                     });
                     if hull != Hull::Unknown {
                         let lit_all = hull == Hull::Lit;
@@ -509,7 +804,7 @@ impl Renderer<'_> {
                     located.clear();
                     for (k, (j, s)) in tile.iter().enumerate() {
                         if faces[j * stride + byte] & bit != 0 {
-                            let m = c.locate(s.p);
+                            let m = c.locate_at(s.p, levels[k]);
                             c.prefetch(m);
                             located.push((k, m));
                         }
@@ -551,15 +846,26 @@ impl Renderer<'_> {
         self.borders(&mut bufs, w, h);
         stats.record(super::Pass::Borders, t);
 
+        let needed = self.maps.needed.get();
         let lights = maps
             .iter()
-            .map(|m| LightStats {
+            .zip(&page_counts)
+            .enumerate()
+            .map(|(l, (m, &[used, drawn]))| LightStats {
                 faces_drawn: m.faces_drawn().iter().filter(|&&f| f).count() as u32,
                 map_bytes: m.memory_bytes() as u64,
+                pages_used: used,
+                pages_drawn: drawn,
+                pages_held: m.page_count() as u32,
+                finest_level: needed
+                    .and_then(|n| n.pages.get(l))
+                    .and_then(|p| p.iter().map(|k| k.level).max())
+                    .unwrap_or(0),
+                level_cap: resolution.get(l).map_or(hyrt_shadowmap::MAX_LEVEL, |r| r.cap),
                 ..LightStats::default()
             })
             .collect();
-        Shadowing { maps, bufs, lights, planes, map_counts }
+        Shadowing { maps, bufs, lights, planes, map_counts, resolution }
     }
 
     /// The borders pass: the (pixel, light) pairs that a shadow ray decides, `bufs.und`, from
@@ -705,6 +1011,13 @@ fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &Renderer) -> Class
     Classifier { map, planes, bias: r.options.shadow.bias, point_error: r.occluders().1 }
 }
 
+/// Light `l`'s decision at `s` by its classifier `cls`, at the level `resolution` gives the
+/// point (paged maps; level 0 when `resolution` is empty).
+fn lookup(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit, r: &Renderer) -> Lookup {
+    let level = resolution.get(l).map_or(0, |g| g.level(s.p, s.ng, s.ng.dot(s.wo), r.lights[l].position));
+    cls.classify_at(s.p, s.tri, cls.locate_at(s.p, level))
+}
+
 /// The classifier of each of `maps`.
 fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &Renderer) -> Vec<Classifier<'m>> {
     maps.iter().map(|map| classifier(map, planes, r)).collect()
@@ -762,7 +1075,7 @@ impl Shadowing<'_> {
                     .iter()
                     .map(|&(l, k)| {
                         let (l, s) = (l as usize, &points[k as usize]);
-                        let hint = cls[l].classify(s.p, s.tri).hint;
+                        let hint = lookup(&cls[l], &self.resolution, l, s, r).hint;
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
@@ -904,11 +1217,16 @@ impl Shadowing<'_> {
                 return EMPTY;
             }
             let s = r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
-            cls[l].classify(s.p, s.tri).hint
+            lookup(&cls[l], &self.resolution, l, &s, r).hint
         });
         let b = &mut self.bufs;
         (b.occ, b.undecided, b.map_border, b.wrong, b.ray, b.hint) =
             (occ, undecided, map_border, wrong, ray, hint);
+    }
+
+    /// Light `l`'s map decision at `s`, at the level the point needs (paged maps).
+    fn decide(&self, r: &Renderer, l: usize, s: &SurfaceHit) -> Lookup {
+        lookup(&classifier(&self.maps[l], self.planes, r), &self.resolution, l, s, r)
     }
 
     /// Visibility of light `l` from a mirror hit (no screen neighbours): the map's decision, or,
@@ -926,7 +1244,7 @@ impl Shadowing<'_> {
         if !map.faces_drawn()[face] {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);
         }
-        let lk = classifier(map, self.planes, r).classify(s.p, s.tri);
+        let lk = self.decide(r, l, s);
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);
         }

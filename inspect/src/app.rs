@@ -10,7 +10,7 @@ use eframe::egui::{
     TextureOptions, Vec2,
 };
 use glam::Vec3 as V3;
-use hyrt::options::{Choice, Indirect, IndirectOptions, Options, Shadows};
+use hyrt::options::{Choice, Indirect, IndirectOptions, LightMaps, Options, Shadows};
 use hyrt::render::Cache;
 use hyrt::render::{
     Pass,
@@ -521,7 +521,13 @@ impl Inspector {
             ui.add_enabled_ui(maps, |ui| {
                 let sh = &mut o.shadow;
                 combo(ui, "map kind", &mut sh.map.kind);
-                resolution_combo(ui, "map resolution", &mut sh.map.resolution);
+                combo(ui, "light maps", &mut sh.light_maps);
+                let paged = sh.light_maps == LightMaps::Paged && sh.map.kind == MapKind::Cube;
+                ui.add_enabled_ui(!paged, |ui| resolution_combo(ui, "map resolution", &mut sh.map.resolution));
+                ui.add_enabled_ui(paged, |ui| {
+                    ui.add(egui::Slider::new(&mut sh.map_detail, 0.25..=4.0).text("map detail (texels per pixel)"));
+                    ui.add(egui::Slider::new(&mut sh.map_budget, 1..=256).text("map budget (MB per light)"));
+                });
                 ui.add(egui::Slider::new(&mut sh.bias, 0.0..=4.0).text("bias (texels)"));
                 ui.add_enabled_ui(o.shadows == Shadows::Smerts, |ui| {
                     combo(ui, "borders", &mut sh.borders);
@@ -1135,11 +1141,21 @@ impl Inspector {
             ui.label(format!("light {l}: no map (no camera hit is in front of it)"));
             return;
         };
+        let layout = if map.is_paged() {
+            format!(
+                "paged: {} pages of {}x{} texels, levels up to {}x{} per face",
+                map.page_count(),
+                hyrt_shadowmap::PAGE,
+                hyrt_shadowmap::PAGE,
+                map.resolution_at(map.levels().saturating_sub(1)),
+                map.resolution_at(map.levels().saturating_sub(1))
+            )
+        } else {
+            format!("{}x{} per face", map.resolution(), map.resolution())
+        };
         ui.label(format!(
-            "light {l}: {} map, {}x{} per face, {} of {} faces drawn (those camera hits fall on), {:.1} MB",
+            "light {l}: {} map, {layout}, {} of {} faces drawn (those camera hits fall on), {:.1} MB",
             kind_name(map.kind()),
-            map.resolution(),
-            map.resolution(),
             map.faces_drawn().iter().filter(|&&d| d).count(),
             map.faces(),
             map.memory_bytes() as f64 / 1048576.0
@@ -1167,7 +1183,9 @@ impl Inspector {
                                 let rect = self.plain_image(ui, &key, img, &label, Vec2::splat(side));
                                 if let Some(m) = marker.as_ref().filter(|m| usize::from(m.face) == f) {
                                     let p = rect.min
-                                        + Vec2::new(m.x, m.y) / map.resolution() as f32 * rect.size();
+                                        + Vec2::new(m.x as f32, m.y as f32)
+                                            / map.resolution_at(m.level) as f32
+                                            * rect.size();
                                     crosshair(ui, p);
                                 }
                             }

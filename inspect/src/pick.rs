@@ -3,12 +3,13 @@
 use glam::Vec3;
 use hyrt::render::{
     Shadows, SurfaceHit,
-    shadows::{RAY_NONE, facing},
+    shadows::{RAY_NONE, facing, resolution_guide},
 };
 use hyrt_shadowmap::{
     EMPTY,
     classify::Decision,
     classify::{Classifier, Lookup},
+    paged::Resolution,
 };
 use hyrt_tracer::RayCounts;
 
@@ -66,9 +67,11 @@ pub struct LightPick {
 #[derive(Clone, Debug)]
 pub struct MapPick {
     pub face: u8,
-    /// Continuous texel coordinates.
-    pub x: f32,
-    pub y: f32,
+    /// The level read (paged maps; 0 for whole ones).
+    pub level: u8,
+    /// Continuous texel coordinates at that level.
+    pub x: f64,
+    pub y: f64,
     /// The texel's stored distance from the light (`inf`: empty) and triangle.
     pub depth: f32,
     pub id: u32,
@@ -103,7 +106,16 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
                     && facing(&s, light, &scene.positions[s.tri as usize]).is_some()
             });
             let map = r.maps.get(l).cloned().flatten().zip(surf).filter(|_| needed).map(|(m, s)| {
-                let c = m.coord(s.p - light.position);
+                // The level the frame read this point at (paged maps; 0 for whole ones).
+                let level = if m.is_paged() {
+                    let cap =
+                        r.frame.stats.lights.get(l).map_or(hyrt_shadowmap::MAX_LEVEL, |st| st.level_cap);
+                    let guide = Resolution { cap, ..resolution_guide(&r.camera, &r.options.shadow) };
+                    guide.level(s.p, s.ng, s.ng.dot(s.wo), light.position)
+                } else {
+                    0
+                };
+                let c = m.coord_at(s.p - light.position, level);
                 let cls = Classifier {
                     map: &m,
                     planes: &loaded.planes[..],
@@ -114,10 +126,11 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
                 let [tx, ty] = lookup.texel;
                 MapPick {
                     face: c.face,
+                    level,
                     x: c.x,
                     y: c.y,
-                    depth: m.depth(lookup.face, tx, ty),
-                    id: m.id(lookup.face, tx, ty),
+                    depth: m.depth_at(level, lookup.face, tx, ty),
+                    id: m.id_at(level, lookup.face, tx, ty),
                     distance: (s.p - light.position).length(),
                     lookup,
                 }

@@ -199,6 +199,12 @@ pub fn depth_face_image(map: &LightMap, face: u8, max_side: u32, range: (f32, f3
     if !map.faces_drawn().get(usize::from(face)).copied().unwrap_or(false) {
         return None;
     }
+    if map.is_paged() {
+        // Paged: each image pixel from the finest page drawn under it.
+        let res = max_side.max(1);
+        let at = |i: u32| (f64::from(i) + 0.5) / f64::from(res);
+        return Some(depth_image(res, max_side, range, |x, y| Some(map.depth_finest(face, at(x), at(y)))));
+    }
     Some(depth_image(map.resolution(), max_side, range, |x, y| {
         map.texel_in_domain(face, x, y).then(|| map.depth(face, x, y))
     }))
@@ -236,6 +242,13 @@ fn texel_of(i: u32, side: u32, res: u32) -> u32 {
 /// samples; `None` when nothing was drawn.
 pub fn depth_range(map: &LightMap, max_side: u32) -> Option<(f32, f32)> {
     let faces: Vec<u8> = (0..map.faces() as u8).filter(|&f| map.faces_drawn()[usize::from(f)]).collect();
+    if map.is_paged() {
+        let res = max_side.max(1);
+        let at = |i: u32| (f64::from(i) + 0.5) / f64::from(res);
+        return range_of(res, max_side, |x, y| {
+            faces.iter().map(|&f| map.depth_finest(f, at(x), at(y))).collect()
+        });
+    }
     range_of(map.resolution(), max_side, |x, y| faces.iter().map(|&f| map.depth(f, x, y)).collect())
 }
 

@@ -163,7 +163,11 @@ fn a_knob_change_renders_again_and_shows_the_new_frame() {
     let undecided = h.state().result.as_ref().expect("rendered").frame.stats.lights[0].undecided;
     assert!(h.query_all_by_label(&undecided.to_string()).count() >= 1, "the lights table shows {undecided}");
 
-    // Map resolution: the light maps are rebuilt at the new size.
+    // Map resolution (of whole maps): the light maps are rebuilt whole at the new size.
+    h.get_by_label("light maps").click();
+    h.run();
+    h.get_by_label("whole").click();
+    settle(&mut h);
     h.get_by_label("map resolution").click();
     h.run();
     h.get_by_label("512x512").click();

@@ -421,11 +421,14 @@ impl Renderer<'_> {
         count: usize,
     ) -> Vec<Vec<Vec<PageKey>>> {
         let w = self.scene.settings.width.max(1) as usize;
-        let rows: Vec<Vec<Vec<Vec<PageKey>>>> = (0..gbuffer.len().div_ceil(w))
+        // Bands of rows in parallel, each marking packed keys with neighbours' repeats skipped;
+        // then per light and cap one sort of all the bands' keys.
+        const ROWS: usize = 8;
+        let bands: Vec<Vec<Vec<Vec<u64>>>> = (0..gbuffer.len().div_ceil(w * ROWS))
             .into_par_iter()
-            .map(|y| {
-                let mut marks: Vec<Vec<Vec<PageKey>>> = vec![vec![Vec::new(); count]; lights.len()];
-                for i in y * w..((y + 1) * w).min(gbuffer.len()) {
+            .map(|b| {
+                let mut marks: Vec<Vec<Vec<u64>>> = vec![vec![Vec::new(); count]; lights.len()];
+                for i in b * w * ROWS..((b + 1) * w * ROWS).min(gbuffer.len()) {
                     let Some(s) = self.shading_point(gbuffer, i) else { continue };
                     let tri = &self.scene.positions[s.tri as usize];
                     // The receiver's factor is the same for every light.
@@ -445,6 +448,7 @@ impl Renderer<'_> {
                             }
                             // Neighbouring pixels mostly mark the same pages: skip the repeats.
                             pages_around(c, |key| {
+                                let key = key.pack();
                                 if !out.iter().rev().take(4).any(|&o| o == key) {
                                     out.push(key);
                                 }
@@ -452,10 +456,6 @@ impl Renderer<'_> {
                         }
                     }
                 }
-                marks.iter_mut().flatten().for_each(|m| {
-                    m.sort_unstable();
-                    m.dedup();
-                });
                 marks
             })
             .collect();
@@ -464,11 +464,10 @@ impl Renderer<'_> {
             .map(|k| {
                 (0..count)
                     .map(|j| {
-                        let mut all: Vec<PageKey> =
-                            rows.iter().flat_map(|r| r[k][j].iter().copied()).collect();
+                        let mut all: Vec<u64> = bands.iter().flat_map(|r| r[k][j].iter().copied()).collect();
                         all.sort_unstable();
                         all.dedup();
-                        all
+                        all.into_iter().map(PageKey::unpack).collect()
                     })
                     .collect()
             })

@@ -158,7 +158,7 @@ fn points_whose_pages_were_not_drawn_are_left_to_rays() {
 fn fine_levels_resolve_a_thin_occluder_far_from_the_light() {
     // A light 1000 units away; a rail 0.01 wide (1e-5 radians from the light) over a floor.
     // A whole face of 2048 texels has texels of about 1e-3 radians: the rail falls between
-    // texel centres. At level 12 (PAGE << 12 = 262144 texels), 2 / 262144 = 7.6e-6 radians.
+    // texel centres. At the level of 262144 texels per side, 2 / 262144 = 7.6e-6 radians.
     let light = Vec3::new(0.0, 1000.0, 0.0);
     let rail = |x0: f32, x1: f32, y: f32| {
         let v = |x: f32, z: f32| Vec3::new(x, y, z);
@@ -178,7 +178,7 @@ fn fine_levels_resolve_a_thin_occluder_far_from_the_light() {
             .count()
     };
     let whole = LightMap::build(&tris, light, &opts(2048), &[true; 6]);
-    let level = 12;
+    let level = (262144 / PAGE).trailing_zeros() as u8;
     let mut keys = Vec::new();
     for i in 0..20 {
         let p = Vec3::new(-0.0045 + 0.009 * i as f32 / 19.0, 0.0, 0.3);

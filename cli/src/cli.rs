@@ -14,7 +14,7 @@ use hyrt::{
     scene,
 };
 
-use crate::stats::{RenderStats, VsReference};
+use crate::stats::{FirstFrame, RenderStats, VsReference};
 
 /// hyrt: a hybrid CPU renderer (rasterization + selective ray tracing).
 #[derive(Parser, Debug)]
@@ -71,7 +71,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub knobs: Knobs,
     /// Also render the ray-traced reference of the same scene (rays everywhere, the same VPLs),
-    /// and print the speed-up (medians of a few alternated frames, caches warm) and the PSNR.
+    /// and print the speed-up (medians of a few alternated frames, caches warm), the first
+    /// frames of both on fresh renderers (BVH and maps built; cold) and the PSNR.
     #[arg(long)]
     pub vs_reference: bool,
     /// Print nothing but errors.
@@ -185,7 +186,12 @@ fn render(a: &RenderArgs) -> Result<()> {
     let frame = renderer.render(&|| bar.inc(1));
     bar.finish_and_clear();
     let (bvh_ms, raster) = (renderer.bvh_build_ms(), renderer.raster_stats());
-    let vs = if a.vs_reference { Some(vs_reference(&mut renderer, &frame.film, a.quiet)?) } else { None };
+    let (vs, first) = if a.vs_reference {
+        let (vs, first) = vs_reference(&mut renderer, &frame.film, a.quiet)?;
+        (Some(vs), Some(first))
+    } else {
+        (None, None)
+    };
 
     say(format!("this frame:\n{}", hyrt::render::format_decisions(&frame.stats.decisions).trim_end()));
     let r = &frame.stats.rays;
@@ -215,6 +221,9 @@ fn render(a: &RenderArgs) -> Result<()> {
             }
         ));
     }
+    if let Some(f) = &first {
+        say(first_frame_line(f));
+    }
     for (l, s) in frame.stats.lights.iter().enumerate() {
         let wrong = match (s.wrong, s.wrong_hint, s.wrong_traversal) {
             (Some(m), Some(h), Some(t)) => {
@@ -223,8 +232,14 @@ fn render(a: &RenderArgs) -> Result<()> {
             _ => String::new(),
         };
         say(format!(
-            "light {l}: {} lit, {} shadowed, {} undecided (rays){wrong}; {} map face(s)",
-            s.lit, s.shadowed, s.undecided, s.faces_drawn
+            "light {l}: {} lit, {} shadowed, {} undecided (rays){wrong}; {} map face(s), {} page(s) held ({} drawn), {:.1} MB",
+            s.lit,
+            s.shadowed,
+            s.undecided,
+            s.faces_drawn,
+            s.pages_held,
+            s.pages_drawn,
+            s.map_bytes as f64 / f64::from(1 << 20)
         ));
     }
 
@@ -243,6 +258,7 @@ fn render(a: &RenderArgs) -> Result<()> {
             stats = stats.with_raster(raster);
         }
         stats.vs_reference = vs;
+        stats.first_frame = first;
         let json = serde_json::to_string_pretty(&stats)?;
         staged.push(output::stage(p, |tmp| std::fs::write(tmp, json.as_bytes()).map_err(Into::into))?);
     }
@@ -257,16 +273,27 @@ fn render(a: &RenderArgs) -> Result<()> {
 /// Frames of each side timed by `--vs-reference`.
 const VS_FRAMES: usize = 3;
 
+/// Cold first frames of each side timed by `--vs-reference` (each on a fresh renderer).
+const COLD_FRAMES: usize = 2;
+
 /// `--vs-reference`: the hybrid's frame against the reference's, both timed with warm caches,
-/// alternated, and the image compared.
-fn vs_reference(renderer: &mut Renderer, film: &hyrt::film::Film, quiet: bool) -> Result<VsReference> {
+/// alternated, and the image compared; and the first frame of each on a fresh renderer
+/// ([`cold_first_frames`]).
+fn vs_reference(
+    renderer: &mut Renderer,
+    film: &hyrt::film::Film,
+    quiet: bool,
+) -> Result<(VsReference, FirstFrame)> {
     let hybrid = *renderer.options();
     let reference = hybrid.reference_for();
-    let bar = progress_bar(2 * VS_FRAMES as u64 + 1, "frames", quiet);
+    let bar = progress_bar(2 * (VS_FRAMES + COLD_FRAMES) as u64 + 1, "frames", quiet);
+    bar.set_message("first frames, cold");
+    let first = cold_first_frames(renderer.scene, hybrid, reference, &|| bar.inc(1));
     bar.set_message("the reference");
     renderer.set_options(reference);
     let ref_film = renderer.render(&|| {}).film;
     bar.inc(1);
+    bar.set_message("warm frames");
     let (mut h, mut r) = (Vec::new(), Vec::new());
     for _ in 0..VS_FRAMES {
         for (o, times) in [(hybrid, &mut h), (reference, &mut r)] {
@@ -278,12 +305,55 @@ fn vs_reference(renderer: &mut Renderer, film: &hyrt::film::Film, quiet: bool) -
     renderer.set_options(hybrid);
     bar.finish_and_clear();
     let (hybrid_ms, reference_ms) = (metrics::Timing::of(&h).median, metrics::Timing::of(&r).median);
-    Ok(VsReference {
+    let vs = VsReference {
         reference_ms,
         hybrid_ms,
         speedup: reference_ms / hybrid_ms.max(1e-9),
         psnr_db: metrics::psnr(renderer.scene, &ref_film, film)?,
-    })
+    };
+    Ok((vs, first))
+}
+
+/// The first frame of each side as one image costs from the command line, scene loading
+/// excluded: a fresh [`Renderer`] (its BVH built, no map or VPL cached), then one frame, in
+/// wall time. [`COLD_FRAMES`] of each, in the order reference, hybrid, hybrid, reference (so
+/// that neither side always goes first), summarised by medians; the hybrid's light-map build
+/// is its frames' `map_build` pass. Each renderer is dropped before the next is made.
+fn cold_first_frames(
+    scene: &hyrt::scene::Scene,
+    hybrid: hyrt::render::Options,
+    reference: hyrt::render::Options,
+    done: &dyn Fn(),
+) -> FirstFrame {
+    let (mut h, mut maps, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..COLD_FRAMES {
+        let order = if i % 2 == 0 { [false, true] } else { [true, false] };
+        for is_hybrid in order {
+            let (renderer, frame, ms) =
+                crate::measure::cold_first_frame(scene, if is_hybrid { hybrid } else { reference });
+            drop(renderer);
+            if is_hybrid {
+                h.push(ms);
+                maps.push(frame.stats.time_ms.get("map_build").copied().unwrap_or(0.0));
+            } else {
+                r.push(ms);
+            }
+            done();
+        }
+    }
+    let median = |v: &[f64]| metrics::Timing::of(v).median;
+    FirstFrame { hybrid_ms: median(&h), hybrid_maps_ms: median(&maps), reference_ms: median(&r) }
+}
+
+/// `first frame: hybrid X ms (maps Y ms) vs reference Z ms (Rx)`, R = Z / X; below 1, it says
+/// that the hybrid is slower.
+fn first_frame_line(f: &FirstFrame) -> String {
+    let ratio = f.reference_ms / f.hybrid_ms.max(1e-9);
+    let slower = if ratio < 1.0 { ", the hybrid is slower" } else { "" };
+    format!(
+        "first frame: hybrid {:.1} ms (maps {:.1} ms) vs reference {:.1} ms ({ratio:.2}x{slower})",
+        f.hybrid_ms, f.hybrid_maps_ms, f.reference_ms
+    )
 }
 
 /// The one progress bar of the commands: `total` units on stderr, hidden when `quiet` or when

@@ -2,15 +2,17 @@
 //!
 //! The machines are shared and noisy, so a comparison is measured in one process, with the
 //! configurations' frames alternated (frame 1 of every configuration, then frame 2, ...) and
-//! summarised by medians. Every configuration renders one warm-up frame first: it builds the
-//! BVH-independent caches (light maps, VPLs and their maps), whose cost is reported separately
-//! (`first_frame_ms`, `map_build_ms`) because a second frame of an unchanged scene reuses them.
+//! summarised by medians. Every configuration renders one warm-up frame first, on a fresh
+//! renderer ([`cold_first_frame`]): it builds the BVH-independent caches (light maps, VPLs and
+//! their maps), whose cost is reported separately (`first_frame_ms`, `map_build_ms`, and with
+//! the BVH build and in wall time `cold_first_frame_ms`) because a second frame of an unchanged
+//! scene reuses them.
 //!
 //! Accuracy is measured against a reference film: PSNR of display luminance
 //! ([`hyrt::metrics`]), and for map-based shadows the wrong-visibility pixels, from one more
 //! frame rendered with `check_visibility` (a shadow ray per map decision; not timed).
 
-use std::collections::BTreeMap;
+use std::{collections::BTreeMap, time::Instant};
 
 use hyrt_tracer::RayCounts;
 use serde::Serialize;
@@ -18,7 +20,7 @@ use serde::Serialize;
 pub use hyrt::metrics::{Timing, psnr, wrong_visibility};
 use hyrt::{
     film::Film,
-    render::{Options, Renderer, Shadows},
+    render::{Frame, Options, Renderer, Shadows},
     scene::Scene,
 };
 
@@ -37,16 +39,23 @@ pub struct Measurement {
     pub frame_ms: Timing,
     /// Median per pass over the timed frames (`FrameStats::time_ms` keys, `total` excluded).
     pub pass_ms: BTreeMap<String, f64>,
-    /// The first frame, which builds the light and VPL maps.
+    /// The first frame, which builds the light and VPL maps (its `total`, the BVH excluded).
     pub first_frame_ms: f64,
+    /// What one image of this configuration costs from scratch ([`cold_first_frame`]): the
+    /// wall time of creating the renderer (BVH build) and rendering the first frame (map
+    /// building), scene loading excluded.
+    pub cold_first_frame_ms: f64,
     /// Light-map and VPL-map build time of the first frame.
     pub map_build_ms: f64,
     /// BVH build when the renderer was created.
     pub bvh_build_ms: f64,
     /// Rays of one steady-state frame, by kind (identical from frame to frame).
     pub rays: RayCounts,
-    /// Memory of the light maps and VPL maps, in bytes.
+    /// Memory of the light maps and VPL maps after the first frame, in bytes.
     pub map_bytes: u64,
+    /// Memory of the light maps alone in the last frame (`LightStats::map_bytes` summed over
+    /// the lights; 0 without map-based shadows), in bytes.
+    pub light_map_bytes: u64,
     /// (camera point, VPL) pairs of the indirect pass per frame (`FrameStats::vpl_pairs`).
     pub vpl_pairs: u64,
     /// Against the reference film, if one was given.
@@ -70,11 +79,29 @@ pub struct MeasureOptions {
     pub check: bool,
 }
 
+/// A fresh [`Renderer`] of `options` and its first frame, as one image costs from the command
+/// line: the wall time of [`Renderer::new`] (BVH, plan) and of the frame (light maps, VPLs and
+/// their maps built, nothing cached), in milliseconds; scene loading excluded.
+pub fn cold_first_frame(scene: &Scene, options: Options) -> (Renderer<'_>, Frame, f64) {
+    let start = Instant::now();
+    let renderer = Renderer::new(scene, options);
+    let frame = renderer.render(&|| {});
+    let ms = start.elapsed().as_secs_f64() * 1e3;
+    (renderer, frame, ms)
+}
+
+/// The light maps' memory in `frame` (0 without map-based shadows).
+fn light_map_bytes(frame: &Frame) -> u64 {
+    frame.stats.lights.iter().map(|l| l.map_bytes).sum()
+}
+
 /// Measures `configs` on `scene`, their timed frames alternated, and compares each film with
 /// `reference` (a film of the same size) when given. `progress` is called after every frame
 /// with the configuration's label.
 ///
-/// All renderers (and their maps) are alive at once: pass a few configurations at a time.
+/// Each configuration's warm-up frame is its [`cold_first_frame`], made after the previous
+/// configurations' warm-up frames. All renderers (and their maps) are alive at once: pass a few
+/// configurations at a time.
 pub fn measure(
     scene: &Scene,
     configs: &[Config],
@@ -93,31 +120,30 @@ pub fn measure(
             scene.settings.height
         );
     }
-    let renderers: Vec<Renderer> = configs.iter().map(|c| Renderer::new(scene, c.options)).collect();
-    let mut out: Vec<Measurement> = configs
-        .iter()
-        .zip(&renderers)
-        .map(|(c, r)| {
-            let f = r.render(&|| {});
-            progress(&c.label);
-            let t = |k: &str| f.stats.time_ms.get(k).copied().unwrap_or(0.0);
-            Measurement {
-                label: c.label.clone(),
-                frame_ms: Timing::default(),
-                pass_ms: BTreeMap::new(),
-                first_frame_ms: t("total"),
-                map_build_ms: t("map_build") + t("vpl_map_build"),
-                bvh_build_ms: r.bvh_build_ms(),
-                rays: f.stats.rays,
-                map_bytes: f.stats.lights.iter().map(|l| l.map_bytes).sum::<u64>() + f.stats.vpl_map_bytes,
-                vpl_pairs: f.stats.vpl_pairs,
-                psnr_db: None,
-                wrong_pairs: None,
-                wrong_pixels: None,
-                film: f.film,
-            }
-        })
-        .collect();
+    let (mut renderers, mut out) = (Vec::new(), Vec::new());
+    for c in configs {
+        let (r, f, cold_ms) = cold_first_frame(scene, c.options);
+        progress(&c.label);
+        let t = |k: &str| f.stats.time_ms.get(k).copied().unwrap_or(0.0);
+        out.push(Measurement {
+            label: c.label.clone(),
+            frame_ms: Timing::default(),
+            pass_ms: BTreeMap::new(),
+            first_frame_ms: t("total"),
+            cold_first_frame_ms: cold_ms,
+            map_build_ms: t("map_build") + t("vpl_map_build"),
+            bvh_build_ms: r.bvh_build_ms(),
+            rays: f.stats.rays,
+            map_bytes: light_map_bytes(&f) + f.stats.vpl_map_bytes,
+            light_map_bytes: light_map_bytes(&f),
+            vpl_pairs: f.stats.vpl_pairs,
+            psnr_db: None,
+            wrong_pairs: None,
+            wrong_pixels: None,
+            film: f.film,
+        });
+        renderers.push(r);
+    }
 
     let mut frames: Vec<Vec<f64>> = vec![Vec::new(); configs.len()];
     let mut passes: Vec<BTreeMap<String, Vec<f64>>> = vec![BTreeMap::new(); configs.len()];
@@ -133,6 +159,7 @@ pub fn measure(
                 }
             }
             out[i].rays = f.stats.rays;
+            out[i].light_map_bytes = light_map_bytes(&f);
             out[i].film = f.film;
         }
     }
@@ -192,5 +219,12 @@ mod tests {
         // Raster visibility: a ray only where a pixel's ray leaves its rasterized triangle.
         assert!(m[1].rays.primary * 100 < m[0].rays.primary, "{:?}", m[1].rays);
         assert!(m[0].rays.primary > 0 && m[0].map_bytes == 0 && m[1].map_bytes > 0);
+        // The hybrid's maps are light maps (no VPLs here); the cold first frame holds the BVH
+        // build and the warm-up frame, in wall time.
+        assert!(m[0].light_map_bytes == 0 && m[1].light_map_bytes == m[1].map_bytes);
+        for m in &m {
+            let (cold, bvh, first) = (m.cold_first_frame_ms, m.bvh_build_ms, m.first_frame_ms);
+            assert!(cold >= bvh + first, "{}: {cold} < {bvh} + {first}", m.label);
+        }
     }
 }

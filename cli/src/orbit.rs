@@ -5,7 +5,7 @@
 //! than a full turn, since the thesis scenes are rooms that a full turn would leave. The two
 //! configurations' frames are alternated at each camera position. The first frame builds the
 //! BVH's companions (light maps, VPLs); every later one reuses them and draws only the
-//! light-map faces its view newly needs ([`Renderer::set_camera`]), counted per frame.
+//! light-map pages its view newly needs ([`Renderer::set_camera`]), counted per frame.
 
 use std::time::Instant;
 
@@ -48,7 +48,7 @@ struct CsvRow {
     config: &'static str,
     frame: u32,
     ms: f64,
-    faces_drawn: u32,
+    pages_drawn: u64,
 }
 
 /// One configuration's frames along the path.
@@ -57,19 +57,40 @@ struct Track {
     first_ms: f64,
     /// Frames after the first, in path order.
     ms: Vec<f64>,
-    /// Light-map faces drawn in each frame after the first.
-    faces: Vec<u32>,
+    /// Light-map pages drawn in each frame after the first.
+    pages: Vec<u64>,
 }
 
-/// Faces rasterized so far over every light's map.
-fn faces_so_far(r: &Renderer, scene: &Scene) -> u32 {
-    (0..scene.lights.len()).filter_map(|l| r.light_map(l)).map(|m| m.faces_rasterized()).sum()
+/// Per light, the pages its map has rasterized so far (`LightMap::pages_rasterized`: a whole
+/// map's face counts all its pages), and whether the map is paged (`None`: no map).
+fn pages_so_far(r: &Renderer, scene: &Scene) -> Vec<Option<(u64, bool)>> {
+    (0..scene.lights.len()).map(|l| r.light_map(l).map(|m| (m.pages_rasterized(), m.is_paged()))).collect()
+}
+
+/// Light-map pages that a frame drew, over every light, from the pages rasterized before
+/// (`before`) and after it (`after`, [`pages_so_far`]). A paged map rebuilt to fit its budget
+/// starts its count again, so a paged map's pages are those the frame reports
+/// (`LightStats::pages_drawn`, all of a rebuilt map's); whole maps only grow (by merges).
+fn pages_drawn(
+    before: &[Option<(u64, bool)>],
+    after: &[Option<(u64, bool)>],
+    lights: &[hyrt::render::shadows::LightStats],
+) -> u64 {
+    after
+        .iter()
+        .enumerate()
+        .map(|(l, a)| match (a, before.get(l).copied().flatten()) {
+            (None, _) => 0,
+            (Some((_, true)), _) => lights.get(l).map_or(0, |s| u64::from(s.pages_drawn)),
+            (Some((n, false)), b) => n.saturating_sub(b.map_or(0, |b| b.0)),
+        })
+        .sum()
 }
 
 /// Runs the orbit of `n` frames on every scene of `a` and writes `orbit.md` and `orbit.csv`.
 pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
     let mut md = format!(
-        "Produced by `hyrt bench --orbit {n}` ({} threads): the camera swings +-{ARC_DEG} degrees about the scene's target in {n} frames; the two configurations' frames alternate at each position. Times are of the frames after the first (which builds the maps); percentiles by nearest rank; fps = frames / total time. Faces: light-map faces drawn after the first frame (0 when the first view's maps serve the whole path).\n\n",
+        "Produced by `hyrt bench --orbit {n}` ({} threads): the camera swings +-{ARC_DEG} degrees about the scene's target in {n} frames; the two configurations' frames alternate at each position. Times are of the frames after the first (which builds the maps); percentiles by nearest rank; fps = frames / total time. Pages: light-map pages (64x64 texels) drawn after the first frame (0 when the first view's maps serve the whole path).\n\n",
         rayon::current_num_threads()
     );
     let mut table = Table::new(
@@ -82,7 +103,7 @@ pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
             "p95 ms",
             "fps",
             "first frame ms",
-            "faces drawn after the first",
+            "pages drawn after the first",
         ],
         2,
     );
@@ -97,29 +118,29 @@ pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
         }
         let mut tracks: Vec<Track> = CONFIGS
             .iter()
-            .map(|(label, _)| Track { label, first_ms: 0.0, ms: vec![], faces: vec![] })
+            .map(|(label, _)| Track { label, first_ms: 0.0, ms: vec![], pages: vec![] })
             .collect();
         for i in 0..n {
             let c = orbit_camera(&cam, i, n);
             for ((_, r), t) in renderers.iter_mut().zip(&mut tracks) {
                 r.set_camera(&c);
-                let before = faces_so_far(r, sc);
+                let before = pages_so_far(r, sc);
                 let start = Instant::now();
-                r.render(&|| {});
+                let frame = r.render(&|| {});
                 let ms = start.elapsed().as_secs_f64() * 1e3;
-                let faces = faces_so_far(r, sc) - before;
+                let pages = pages_drawn(&before, &pages_so_far(r, sc), &frame.stats.lights);
                 frames.push(CsvRow {
                     scene: sc.name.clone(),
                     config: t.label,
                     frame: i,
                     ms: round(ms, 3),
-                    faces_drawn: faces,
+                    pages_drawn: pages,
                 });
                 if i == 0 {
                     t.first_ms = ms;
                 } else {
                     t.ms.push(ms);
-                    t.faces.push(faces);
+                    t.pages.push(pages);
                 }
             }
         }
@@ -135,7 +156,7 @@ pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
                 format!("{:.1}", percentile(&t.ms, 95.0)),
                 format!("{fps:.2}"),
                 format!("{:.0}", t.first_ms),
-                t.faces.iter().sum::<u32>().to_string(),
+                t.pages.iter().sum::<u64>().to_string(),
             ]);
         }
         eprintln!("{}: orbit done", sc.name);

@@ -21,9 +21,14 @@ pub struct RenderStats<'a> {
     pub plan_detail: &'a Plan,
     pub rays: hyrt_tracer::RayCounts,
     /// Per light, with map-based shadows: camera hits the map decided lit / shadowed, those
-    /// left undecided (given a shadow ray), map faces drawn, and with `--check-visibility` the
-    /// map decisions a shadow ray contradicts (`wrong`).
+    /// left undecided (given a shadow ray), map faces drawn, pages used, drawn and held, map
+    /// memory, and with `--check-visibility` the map decisions a shadow ray contradicts
+    /// (`wrong`).
     pub shadow_lights: Vec<hyrt::render::shadows::LightStats>,
+    /// With map-based shadows: `light_map_bytes`, `light_map_pages`, `light_map_pages_drawn`
+    /// (the lights' totals, [`LightMapTotals`]).
+    #[serde(flatten)]
+    pub light_maps: Option<LightMapTotals>,
     /// What the frame rebuilt or reused (BVH, light maps, VPLs), and per light whether it
     /// needed a map and rays at all.
     pub frame_decisions: Vec<hyrt::render::FrameDecision>,
@@ -44,6 +49,43 @@ pub struct RenderStats<'a> {
     /// With `--vs-reference`: the frame against the ray-traced reference.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub vs_reference: Option<VsReference>,
+    /// With `--vs-reference`: the first frame of each side on a fresh renderer.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_frame: Option<FirstFrame>,
+}
+
+/// The light maps of a frame with map-based shadows, summed over the lights
+/// ([`hyrt::render::shadows::LightStats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct LightMapTotals {
+    /// Memory of the maps (`map_bytes`).
+    pub light_map_bytes: u64,
+    /// Pages the maps hold (`pages_held`).
+    pub light_map_pages: u64,
+    /// Pages drawn for this frame (`pages_drawn`; the others were reused).
+    pub light_map_pages_drawn: u64,
+}
+
+impl LightMapTotals {
+    /// The totals of `lights`, `None` without map-based shadows (no per-light stats).
+    pub fn of(lights: &[hyrt::render::shadows::LightStats]) -> Option<Self> {
+        (!lights.is_empty()).then(|| Self {
+            light_map_bytes: lights.iter().map(|l| l.map_bytes).sum(),
+            light_map_pages: lights.iter().map(|l| u64::from(l.pages_held)).sum(),
+            light_map_pages_drawn: lights.iter().map(|l| u64::from(l.pages_drawn)).sum(),
+        })
+    }
+}
+
+/// `hyrt render --vs-reference`: the first frame of each side on a fresh renderer (its BVH
+/// built, its maps and VPLs made), wall time, scene loading excluded; medians of a few
+/// alternated runs.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct FirstFrame {
+    pub hybrid_ms: f64,
+    /// The hybrid's `map_build` pass in those frames.
+    pub hybrid_maps_ms: f64,
+    pub reference_ms: f64,
 }
 
 /// `hyrt render --vs-reference`: medians of alternated frames with warm caches, and the image
@@ -89,6 +131,7 @@ impl<'a> RenderStats<'a> {
             plan: plan.pass_names(),
             plan_detail: plan,
             shadow_lights: frame.lights.clone(),
+            light_maps: LightMapTotals::of(&frame.lights),
             frame_decisions: frame.decisions.clone(),
             maps_built: frame.maps_built,
             vpls: frame.vpls,
@@ -98,6 +141,7 @@ impl<'a> RenderStats<'a> {
             raster: None,
             time_ms,
             vs_reference: None,
+            first_frame: None,
         }
     }
 

@@ -10,7 +10,12 @@
 //! then `--runs` timed frames; its last frame is the reference film), then each combination in
 //! turn, its frames alternated with the reference's (a warm-up frame each, which builds the
 //! maps, then `--runs` timed frames of both, then for map-based shadows one untimed frame with
-//! a shadow ray per map decision that counts wrong-visibility pixels). A combination's speed-up
+//! a shadow ray per map decision that counts wrong-visibility pixels). The warm-up frame is on
+//! a fresh renderer, so its wall time with the renderer's creation is what one image of the
+//! configuration costs from scratch (`first_frame_ms`: BVH build, map building and the frame,
+//! scene loading excluded; [`crate::measure::cold_first_frame`], as `hyrt render
+//! --vs-reference` measures it). Memory: `light_map_mb`, the light maps of the last frame
+//! (`LightStats::map_bytes` summed over the lights, in 2^20 bytes). A combination's speed-up
 //! is the reference's median over those alternated frames divided by its own: measured side by
 //! side, so that a machine whose load drifts during a long sweep (shared machines do) moves
 //! both alike. It costs twice the frames. Combinations are not alternated with each other:
@@ -24,8 +29,9 @@
 //!
 //! Output in `--out`: `sweep.csv`, `sweep.json` (both rewritten after every combination, so an
 //! interrupted sweep keeps what it measured), `sweep.png` (PSNR against frame time, front
-//! marked) and `README.md` (the command line and a table sorted by time); with `--images`,
-//! `images/` holds each film as PNG and EXR.
+//! marked), `sweep-first-frame.png` (PSNR against first-frame time, labels with the light maps'
+//! memory, that plot's own front marked) and `README.md` (the command line and a table sorted
+//! by time); with `--images`, `images/` holds each film as PNG and EXR.
 
 use std::path::{Path, PathBuf};
 
@@ -219,9 +225,23 @@ struct Row {
 impl Row {
     /// Median frame ms and PSNR as the CSV shows them (3 decimals): the Pareto front's inputs.
     fn front_point(&self) -> (f64, f64) {
-        let r = |v: f64| if v.is_finite() { (v * 1e3).round() / 1e3 } else { v };
-        (r(self.m.frame_ms.median), r(self.m.psnr_db.unwrap_or(f64::NAN)))
+        (round3(self.m.frame_ms.median), round3(self.m.psnr_db.unwrap_or(f64::NAN)))
     }
+
+    /// First-frame ms and PSNR as the CSV shows them: the first-frame plot's front.
+    fn first_frame_point(&self) -> (f64, f64) {
+        (round3(self.m.cold_first_frame_ms), round3(self.m.psnr_db.unwrap_or(f64::NAN)))
+    }
+
+    /// The light maps' memory in MB (2^20 bytes).
+    fn light_map_mb(&self) -> f64 {
+        self.m.light_map_bytes as f64 / f64::from(1 << 20)
+    }
+}
+
+/// To the 3 decimals of the CSV (non-finite values unchanged).
+fn round3(v: f64) -> f64 {
+    if v.is_finite() { (v * 1e3).round() / 1e3 } else { v }
 }
 
 /// Runs `hyrt sweep`.
@@ -378,35 +398,53 @@ pub fn run(a: &SweepArgs) -> Result<()> {
             false
         }
     };
-    let points: Vec<plot::Point> = rows
-        .iter()
-        .zip(&front)
-        .map(|(r, &f)| plot::Point {
-            x: r.m.frame_ms.median,
-            y: r.m.psnr_db.unwrap_or(f64::NAN),
-            // Few points: label them all; many: only the front, or the plot is unreadable.
-            label: if rows.len() <= 12 || f { r.values.join(", ") } else { String::new() },
-            front: f,
-        })
-        .collect();
+    // Few points: label them all; many: only the front's, or the plot is unreadable.
+    let points = |front: &[bool], x: &dyn Fn(&Row) -> f64, label: &dyn Fn(&Row) -> String| {
+        rows.iter()
+            .zip(front)
+            .map(|(r, &f)| plot::Point {
+                x: x(r),
+                y: r.m.psnr_db.unwrap_or(f64::NAN),
+                label: if rows.len() <= 12 || f { label(r) } else { String::new() },
+                front: f,
+            })
+            .collect::<Vec<_>>()
+    };
     let names: Vec<&str> = knobs.iter().map(|k| k.name.as_str()).collect();
-    let title = format!(
-        "{} {}x{}: PSNR against frame time (labels: {})",
-        scene.name,
-        scene.settings.width,
-        scene.settings.height,
-        names.join(", ")
-    );
-    let marker = format!("reference {} ms", fmt_ms(ref_ms));
+    let title = |against: &str, labels: &str| {
+        format!(
+            "{} {}x{}: PSNR against {against} (labels: {labels})",
+            scene.name, scene.settings.width, scene.settings.height
+        )
+    };
+    let y_name = "PSNR of luminance vs reference (dB)";
     let png = a.out.join("sweep.png");
     plot::write_png(
         &png,
         &plot::Plot {
-            title: &title,
+            title: &title("frame time", &names.join(", ")),
             x_name: "median frame time (ms)",
-            y_name: "PSNR of luminance vs reference (dB)",
-            points: &points,
-            x_marker: Some((ref_ms, &marker)),
+            y_name,
+            points: &points(&front, &|r| r.m.frame_ms.median, &|r| r.values.join(", ")),
+            x_marker: Some((ref_ms, &format!("reference {} ms", fmt_ms(ref_ms)))),
+            size: (1100, 750),
+        },
+        text,
+    )?;
+    // The same errors against what one image costs from scratch, and the light maps' memory.
+    let first_front = plot::pareto_front(&rows.iter().map(Row::first_frame_point).collect::<Vec<_>>());
+    let ref_first = reference.m.cold_first_frame_ms;
+    let first_png = a.out.join("sweep-first-frame.png");
+    plot::write_png(
+        &first_png,
+        &plot::Plot {
+            title: &title("first-frame time", &format!("{}; light-map MB", names.join(", "))),
+            x_name: "first frame on a fresh renderer, BVH and maps built (ms)",
+            y_name,
+            points: &points(&first_front, &|r| r.m.cold_first_frame_ms, &|r| {
+                format!("{}; {:.1} MB", r.values.join(", "), r.light_map_mb())
+            }),
+            x_marker: Some((ref_first, &format!("reference {} ms", fmt_ms(ref_first)))),
             size: (1100, 750),
         },
         text,
@@ -417,10 +455,11 @@ pub fn run(a: &SweepArgs) -> Result<()> {
     atomic_write(&md, |tmp| std::fs::write(tmp, readme.as_bytes()).map_err(Into::into))?;
     println!("{table}");
     eprintln!(
-        "wrote {}, {}, {}, {}{}",
+        "wrote {}, {}, {}, {}, {}{}",
         a.out.join("sweep.csv").display(),
         a.out.join("sweep.json").display(),
         png.display(),
+        first_png.display(),
         md.display(),
         if a.images { format!(", {}/", images.display()) } else { String::new() }
     );
@@ -519,16 +558,17 @@ fn one_line(r: &Row) -> String {
         String::new()
     };
     format!(
-        "{}: {} ms ({:.2}x), PSNR {} dB, FLIP {:.4}{wrong}{maps}",
+        "{}: {} ms ({:.2}x), first frame {} ms, PSNR {} dB, FLIP {:.4}{wrong}{maps}",
         r.label,
         fmt_ms(m.frame_ms.median),
         r.speedup,
+        fmt_ms(m.cold_first_frame_ms),
         fmt_psnr(m.psnr_db),
         r.flip
     )
 }
 
-const CSV_COLUMNS: [&str; 16] = [
+const CSV_COLUMNS: [&str; 17] = [
     "frame_ms_median",
     "frame_ms_min",
     "frame_ms_max",
@@ -541,6 +581,7 @@ const CSV_COLUMNS: [&str; 16] = [
     "map_build_ms",
     "first_frame_ms",
     "map_mb",
+    "light_map_mb",
     "shadow_rays",
     "vpl_shadow_rays",
     "total_rays",
@@ -570,8 +611,9 @@ fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> Result<String> {
             fmt_opt(m.wrong_pixels),
             fmt_opt(m.wrong_pairs),
             format!("{:.3}", m.map_build_ms),
-            format!("{:.3}", m.first_frame_ms),
+            format!("{:.3}", m.cold_first_frame_ms),
             format!("{:.3}", m.map_bytes as f64 / 1e6),
+            format!("{:.3}", r.light_map_mb()),
             m.rays.shadow.to_string(),
             m.rays.vpl_shadow.to_string(),
             m.rays.total().to_string(),
@@ -655,6 +697,7 @@ fn summary_table(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
             "map build ms",
             "first frame ms",
             "map MB",
+            "light map MB",
             "rays",
             "front",
         ]
@@ -678,8 +721,9 @@ fn summary_table(knobs: &[Knob], reference: &Row, rows: &[Row]) -> String {
             format!("{:.4}", r.flip),
             m.wrong_pixels.map_or("-".into(), |v| v.to_string()),
             if m.map_bytes > 0 { format!("{:.0}", m.map_build_ms) } else { "-".into() },
-            format!("{:.0}", m.first_frame_ms),
+            format!("{:.0}", m.cold_first_frame_ms),
             if m.map_bytes > 0 { format!("{:.0}", m.map_bytes as f64 / 1e6) } else { "-".into() },
+            if m.light_map_bytes > 0 { format!("{:.1}", r.light_map_mb()) } else { "-".into() },
             m.rays.total().to_string(),
             match f {
                 Some(true) => "**front**".into(),
@@ -702,15 +746,21 @@ fn summary(ctx: &Sweep, reference: &Row, table: &str) -> String {
          ```\n{cmd}\n```\n\n\
          - Knobs: {knobs}; each configuration is `{base}` followed by `--NAME=VALUE` per knob.\n\
          - Reference: `{reference}`{vpls}, {ref_ms} ms per frame.\n\
-         - Frame time: median of {runs} frames after a warm-up frame (which builds the maps: \
-         `first frame ms`); {threads} threads; each configuration's frames alternated with the \
-         reference's, and its speed-up measured against those (side by side).\n\
+         - Frame time: median of {runs} frames after a warm-up frame; {threads} threads; each \
+         configuration's frames alternated with the reference's, and its speed-up measured \
+         against those (side by side).\n\
+         - `first frame ms`: the warm-up frame on a fresh renderer, in wall time with the \
+         renderer's creation: its BVH build, map building and frame (scene loading excluded), \
+         what one image costs from scratch. `map MB`: light and VPL maps (10^6 bytes); \
+         `light map MB`: the light maps alone (2^20 bytes).\n\
          - Error against the reference: PSNR of display luminance (higher is better), mean \
          FLIP (0 = identical, lower is better), `wrong px`: pixels whose map decision a shadow ray \
          contradicts, counted in an extra untimed frame.\n\
          - Pareto front (**front**): no other configuration is at least as fast and as accurate \
          (PSNR), and better in one. `rays`: all rays of one frame.\n\n\
          ![PSNR against frame time, Pareto front in red](sweep.png)\n\n\
+         ![PSNR against first-frame time, labelled with the light maps' MB; that plot's front in \
+         red](sweep-first-frame.png)\n\n\
          Fastest first:\n\n{table}\n\
          All numbers: `sweep.csv`, `sweep.json` (with every configuration's options).\n",
         name = s.name,

@@ -58,6 +58,8 @@ fn stats_json_has_plan_rays_and_times() {
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
     assert!(v.get("vs_reference").is_none(), "only with --vs-reference");
+    assert!(v.get("first_frame").is_none(), "only with --vs-reference");
+    assert!(v.get("light_map_bytes").is_none() && v.get("light_map_pages").is_none(), "no maps: {v}");
     assert_eq!(v["scene"], "cornell");
     assert_eq!(v["width"], 64);
     assert_eq!(v["height"], 48);
@@ -616,8 +618,25 @@ fn knob_table_in_docs_is_current() {
     );
 }
 
+/// The numbers of `hyrt render --vs-reference`'s line
+/// `first frame: hybrid X ms (maps Y ms) vs reference Z ms (Rx)` (R possibly followed by a
+/// comma and words): `[X, Y, Z, R]`, or `None` if the line is not of that form.
+fn first_frame_numbers(line: &str) -> Option<[f64; 4]> {
+    let w: Vec<&str> = line.strip_prefix("first frame: hybrid ")?.split_whitespace().collect();
+    if w.len() < 10 || (w[1], w[2], w[4], w[5], w[6], w[8]) != ("ms", "(maps", "ms)", "vs", "reference", "ms")
+    {
+        return None;
+    }
+    let ratio = w[9].strip_prefix('(')?.trim_end_matches([')', ',']).strip_suffix('x')?;
+    if w.len() == 10 && !w[9].ends_with(')') {
+        return None;
+    }
+    Some([w[0].parse().ok()?, w[3].parse().ok()?, w[7].parse().ok()?, ratio.parse().ok()?])
+}
+
 /// `hyrt render` without a preset renders the hybrid; `--vs-reference` also renders the
-/// reference and reports the speed-up and the PSNR, on the terminal and in the stats.
+/// reference and reports the speed-up and the PSNR, and the first frame of each on a fresh
+/// renderer, on the terminal and in the stats; the stats total the light maps.
 #[test]
 fn render_defaults_to_the_hybrid_and_compares_with_the_reference() {
     let d = out_dir("vs_reference");
@@ -633,6 +652,27 @@ fn render_defaults_to_the_hybrid_and_compares_with_the_reference() {
     let (r, h) = (vs["reference_ms"].as_f64().unwrap(), vs["hybrid_ms"].as_f64().unwrap());
     assert!(r > 0.0 && h > 0.0 && (vs["speedup"].as_f64().unwrap() - r / h).abs() < 1e-9, "{vs}");
     assert!(vs["psnr_db"] == "inf" || vs["psnr_db"].as_f64().unwrap() > 30.0, "{vs}");
+    // The cold first frames: one line with their numbers, the same as the stats'.
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("first frame:")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    let [x, y, z, ratio] = first_frame_numbers(lines[0]).unwrap_or_else(|| panic!("{}", lines[0]));
+    let first = &v["first_frame"];
+    let num = |k: &str| first[k].as_f64().unwrap_or_else(|| panic!("first_frame.{k}: {first}"));
+    let (fh, fm, fr) = (num("hybrid_ms"), num("hybrid_maps_ms"), num("reference_ms"));
+    assert!(fh > 0.0 && fr > 0.0 && (0.0..=fh).contains(&fm), "{first}");
+    for (printed, exact) in [(x, fh), (y, fm), (z, fr)] {
+        assert!((printed - exact).abs() <= 0.05 + 1e-9, "{} against {first}", lines[0]);
+    }
+    assert!((ratio - fr / fh).abs() <= 0.005 + 1e-9, "{} against {first}", lines[0]);
+    assert_eq!(lines[0].contains("slower"), fr < fh, "{}", lines[0]);
+    // The light maps, summed over the lights; the first frame drew every page it holds.
+    let total = |k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k} missing"));
+    let lights = v["shadow_lights"].as_array().unwrap();
+    let sum = |k: &str| lights.iter().map(|l| l[k].as_u64().unwrap()).sum::<u64>();
+    assert!(total("light_map_bytes") > 0 && total("light_map_pages") > 0, "{v}");
+    assert_eq!(total("light_map_bytes"), sum("map_bytes"));
+    assert_eq!(total("light_map_pages"), sum("pages_held"));
+    assert_eq!(total("light_map_pages_drawn"), total("light_map_pages"));
     // The image written is the hybrid's, as without the flag.
     let (ok, _, err) =
         hyrt(&["render", "cornell", "--size", "64x48", "-q", "-o", d.join("plain.png").to_str().unwrap()]);

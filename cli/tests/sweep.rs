@@ -75,6 +75,7 @@ fn two_by_two_sweep_writes_consistent_csv_json_png_and_images() {
         "map_build_ms",
         "first_frame_ms",
         "map_mb",
+        "light_map_mb",
         "shadow_rays",
         "vpl_shadow_rays",
         "total_rays",
@@ -118,6 +119,14 @@ fn two_by_two_sweep_writes_consistent_csv_json_png_and_images() {
     }
     assert_eq!(rows[0][col("pareto")], "false");
 
+    // Memory: the light maps alone (2^20 bytes) are part of all the maps (10^6 bytes); the
+    // reference has none.
+    assert_eq!((num(&rows[0], "light_map_mb"), num(&rows[0], "map_mb")), (0.0, 0.0));
+    for r in &rows[1..] {
+        let light = num(r, "light_map_mb");
+        assert!(light > 0.0 && light * 1.048576 <= num(r, "map_mb") + 1e-3, "{r:?}");
+    }
+
     // JSON: every configuration with its knobs, options and measurement.
     let j = json(&out.join("sweep.json"));
     assert_eq!(
@@ -150,14 +159,60 @@ fn two_by_two_sweep_writes_consistent_csv_json_png_and_images() {
         assert_eq!(psnr_of(&v["psnr_db"]), psnr, "{}", exr.display());
     }
     assert_eq!(j["reference"]["measurement"]["psnr_db"], "inf");
+    // The CSV's first frame is the cold one: the renderer's creation (BVH build) and its first
+    // frame, in wall time; the memory is the measurement's light maps.
+    let measured = std::iter::once(&j["reference"]).chain(configs);
+    for (c, r) in measured.map(|c| &c["measurement"]).zip(&rows) {
+        let f = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k}: {c}"));
+        assert!((num(r, "first_frame_ms") - f("cold_first_frame_ms")).abs() <= 5e-4, "{r:?}");
+        assert!(f("cold_first_frame_ms") >= f("bvh_build_ms") + f("first_frame_ms"), "{c}");
+        let mb = f("light_map_bytes") / f64::from(1 << 20);
+        assert!((num(r, "light_map_mb") - mb).abs() <= 5e-4, "{r:?}");
+    }
 
-    // The plot decodes; the README has the command line and the table.
-    let img = image::open(out.join("sweep.png")).unwrap();
-    assert!(img.width() >= 800 && img.height() >= 500);
+    // The plots decode; the README has the command line and the table.
+    for png in ["sweep.png", "sweep-first-frame.png"] {
+        let img = image::open(out.join(png)).unwrap();
+        assert!(img.width() >= 800 && img.height() >= 500, "{png}");
+    }
     let readme = read_text(&out.join("README.md"));
     assert!(readme.contains("hyrt sweep cornell --size 64x48"), "{readme}");
     assert!(readme.contains("| shadow-map-res | bias |") && readme.contains("**front**"), "{readme}");
     assert!(readme.contains("![PSNR against frame time"), "{readme}");
+    assert!(readme.contains("(sweep-first-frame.png)") && readme.contains("| light map MB |"), "{readme}");
+}
+
+/// Both light-map layouts as a knob: each point has its first frame and its light maps'
+/// memory.
+#[test]
+fn light_map_layouts_sweep_with_first_frame_and_memory() {
+    let d = out_dir("sweep_layouts");
+    let out = d.join("out");
+    let (ok, _, err) = hyrt(&[
+        "sweep",
+        "cornell",
+        "--size",
+        "32x24",
+        "--runs",
+        "1",
+        "--knob",
+        "light-maps=whole,paged",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let csv = read_text(&out.join("sweep.csv"));
+    let lines: Vec<&str> = csv.lines().collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines[2..].iter().map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.iter().map(|r| r[1]).collect::<Vec<_>>(), ["whole", "paged"], "{csv}");
+    for r in &rows {
+        let num = |name: &str| -> f64 { r[col(name)].parse().unwrap() };
+        assert!(num("light_map_mb") > 0.0 && num("first_frame_ms") > 0.0, "{r:?}");
+        assert!(num("first_frame_ms") >= num("map_build_ms"), "{r:?}");
+    }
+    assert!(out.join("sweep-first-frame.png").is_file());
 }
 
 /// Indirect light in the base flags: the reference gets the same VPLs, by rays, unless its

@@ -477,12 +477,12 @@ impl Classifier<'_> {
         let light = map.light();
         let v = p - light;
         let last = map.resolution_at(c.level).saturating_sub(1);
-        let at = |x: u32, y: u32| map.id_at(c.level, c.face, x, y);
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-        let centre = at(ix, iy);
-
         let Footprint { texels: foot, inside, in_domain, .. } = Footprint::of(map, c);
-        let foot_ids = if inside { foot.map(|(x, y)| at(x, y)) } else { [centre; 4] };
+        // The centre and the footprint, each page looked up once.
+        let [centre, f0, f1, f2, f3] =
+            map.ids_at(c.level, c.face, [(ix, iy), foot[0], foot[1], foot[2], foot[3]]);
+        let foot_ids = if inside { [f0, f1, f2, f3] } else { [centre; 4] };
         let texel = [ix, iy];
 
         // A texel in a page that a paged map did not draw: the map cannot tell (a ray decides).

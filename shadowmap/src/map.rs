@@ -882,6 +882,38 @@ impl LightMap {
         }
     }
 
+    /// [`LightMap::id_at`] of several texels of `face` at `level`, looking each page up once:
+    /// the texels of a footprint mostly share one (a page table lookup is a hash at the fine
+    /// levels of a paged map).
+    #[inline]
+    pub fn ids_at<const N: usize>(&self, level: u8, face: u8, texels: [(u32, u32); N]) -> [u32; N] {
+        let res = self.resolution_at(level);
+        let Some(f) = self.face_at(level, face) else {
+            let missing = if self.paged && usize::from(face) < self.layout.face_count() { ABSENT } else { EMPTY };
+            return texels.map(|(x, y)| if x >= res || y >= res { EMPTY } else { missing });
+        };
+        let none = if self.paged { ABSENT } else { EMPTY };
+        let mut last: Option<((u32, u32), Option<usize>)> = None;
+        texels.map(|(x, y)| {
+            if x >= res || y >= res {
+                return EMPTY;
+            }
+            let page = (x / PAGE, y / PAGE);
+            let slot = match last {
+                Some((p, s)) if p == page => s,
+                _ => {
+                    let s = f.slot(page.0, page.1);
+                    last = Some((page, s));
+                    s
+                }
+            };
+            match slot {
+                Some(s) => f.id[s * PAGE_TEXELS + ((y % PAGE) * PAGE + x % PAGE) as usize],
+                None => none,
+            }
+        })
+    }
+
     /// Whether the map is paged ([`LightMap::build_pages`]): a page not drawn is then
     /// [`ABSENT`], not empty.
     #[inline]

@@ -343,6 +343,21 @@ impl Renderer<'_> {
         Some(SurfaceHit::new(self.scene, hit, self.camera_ray((i % w) as u32, (i / w) as u32).dir))
     }
 
+    /// What marking needs of the camera hit of pixel `i` (where direct light is computed at
+    /// all): its position, geometric normal (not flipped to the viewer) and the unit direction
+    /// back to the camera, bit for bit the `p`, `+-ng` and `wo` of its [`SurfaceHit`] (the
+    /// same expressions), without the shading normal's interpolation.
+    #[inline]
+    fn receiver_geometry(&self, gbuffer: &[Option<Hit>], i: usize) -> Option<(Vec3, Vec3, Vec3)> {
+        let w = self.scene.settings.width.max(1) as usize;
+        let hit = gbuffer[i].as_ref().filter(|h| self.needs_light(h.tri))?;
+        let tri = &self.scene.positions[hit.tri as usize];
+        let (p, _) = hyrt_tracer::offset::hit_point(tri, hit.bary);
+        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+        let wo = -self.camera_ray((i % w) as u32, (i / w) as u32).dir;
+        Some((p, ng, wo))
+    }
+
     /// Whether the light maps are paged: `LightMaps::Paged` with cube maps.
     pub(crate) fn paged_maps(&self) -> bool {
         let o = &self.options.shadow;
@@ -429,22 +444,29 @@ impl Renderer<'_> {
             .map(|b| {
                 let mut marks: Vec<Vec<Vec<u64>>> = vec![vec![Vec::new(); count]; lights.len()];
                 for i in b * w * ROWS..((b + 1) * w * ROWS).min(gbuffer.len()) {
-                    let Some(s) = self.shading_point(gbuffer, i) else { continue };
-                    let tri = &self.scene.positions[s.tri as usize];
+                    let Some((p, ng, wo)) = self.receiver_geometry(gbuffer, i) else { continue };
                     // The receiver's factor is the same for every light.
-                    let recv = resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
+                    let view = ng.dot(wo);
+                    let recv = resolution.first().map_or(0.0, |g| g.receiver(p, view));
                     for (k, &l) in lights.iter().enumerate() {
                         let light = &self.lights[l];
-                        if facing(&s, light, tri).is_none() {
+                        // A superset of the lights classification decides (`facing` and the
+                        // viewer's side of the plane): a light with some intensity not clearly
+                        // behind the surface as the viewer sees it.
+                        let v = light.position - p;
+                        let side = ng.dot(v);
+                        if light.intensity.max_element() <= 0.0
+                            || (side * view < 0.0 && side.abs() > 1e-4 * v.length())
+                        {
                             continue;
                         }
                         let g = &resolution[l];
-                        let level = g.level_for(recv, s.p, s.ng, light.position);
-                        let mut c = paged::locate(s.p - light.position, level);
+                        let level = g.level_for(recv, p, ng, light.position);
+                        let mut c = paged::locate(p - light.position, level);
                         for (j, out) in marks[k].iter_mut().enumerate() {
                             let lv = level.min(g.cap.saturating_sub(j as u8));
                             if lv != c.level {
-                                c = paged::locate(s.p - light.position, lv);
+                                c = paged::locate(p - light.position, lv);
                             }
                             // Neighbouring pixels mostly mark the same pages: skip the repeats.
                             pages_around(c, |key| {

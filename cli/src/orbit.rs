@@ -90,8 +90,9 @@ fn pages_drawn(
 /// Runs the orbit of `n` frames on every scene of `a` and writes `orbit.md` and `orbit.csv`.
 pub fn run(a: &BenchArgs, scenes: &[Scene], n: u32) -> Result<()> {
     let mut md = format!(
-        "Produced by `hyrt bench --orbit {n}` ({} threads): the camera swings +-{ARC_DEG} degrees about the scene's target in {n} frames; the two configurations' frames alternate at each position. Times are of the frames after the first (which builds the maps); percentiles by nearest rank; fps = frames / total time. Pages: light-map pages (64x64 texels) drawn after the first frame (0 when the first view's maps serve the whole path).\n\n",
-        rayon::current_num_threads()
+        "Produced by `hyrt bench --orbit {n}` ({} threads): the camera swings +-{ARC_DEG} degrees about the scene's target in {n} frames; the two configurations' frames alternate at each position. Times are of the frames after the first (which builds the maps); percentiles by nearest rank; fps = frames / total time. Pages: light-map pages ({p}x{p} texels) drawn after the first frame (0 when the first view's maps serve the whole path).\n\n",
+        rayon::current_num_threads(),
+        p = hyrt_shadowmap::PAGE
     );
     let mut table = Table::new(
         &[

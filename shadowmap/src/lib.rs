@@ -47,5 +47,7 @@ mod tess;
 pub mod vpl_map;
 
 pub use cube::{CubeFace, cube_lookup};
-pub use map::{ABSENT, EMPTY, LightMap, MAX_LEVEL, MapCoord, MapKind, MapOptions, PAGE, PageKey};
+pub use map::{
+    ABSENT, EMPTY, LightMap, MAX_LEVEL, MapCoord, MapKind, MapOptions, PAGE, PageKey, paged_memory_bound,
+};
 pub use paraboloid::{Hemisphere, paraboloid_project, paraboloid_unproject};

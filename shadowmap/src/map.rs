@@ -262,6 +262,16 @@ impl PageKey {
 /// of paged maps, where a frame draws a few pages of millions) are hash maps.
 const DENSE_PAGES: usize = 1 << 12;
 
+/// The most memory ([`LightMap::memory_bytes`]) that a paged cube map of `pages` pages can
+/// take, wherever they lie: per page its ids, depths, both region summaries and its page-table
+/// entry, plus the dense page tables of the coarse levels (allocated whole once a level of a
+/// face holds a page). For sizing maps under a memory budget.
+pub fn paged_memory_bound(pages: usize) -> usize {
+    let per_page = PAGE_TEXELS * 8 + PAGE_REGIONS * 8 + 8;
+    let dense_levels = (0..=MAX_LEVEL).filter(|&k| (1usize << (2 * k)) <= DENSE_PAGES).count();
+    pages * per_page + dense_levels * 6 * DENSE_PAGES * 4
+}
+
 /// No page in a dense page table.
 const NO_PAGE: u32 = u32::MAX;
 
@@ -889,7 +899,8 @@ impl LightMap {
     pub fn ids_at<const N: usize>(&self, level: u8, face: u8, texels: [(u32, u32); N]) -> [u32; N] {
         let res = self.resolution_at(level);
         let Some(f) = self.face_at(level, face) else {
-            let missing = if self.paged && usize::from(face) < self.layout.face_count() { ABSENT } else { EMPTY };
+            let missing =
+                if self.paged && usize::from(face) < self.layout.face_count() { ABSENT } else { EMPTY };
             return texels.map(|(x, y)| if x >= res || y >= res { EMPTY } else { missing });
         };
         let none = if self.paged { ABSENT } else { EMPTY };

@@ -50,7 +50,8 @@
 //! the margin of the tile test ([`Classifier::hull`](crate::classify::Classifier::hull)), that
 //! is every page within [`MARGIN`] texels of its projection ([`pages_around`]). A lookup that
 //! still reaches a page not drawn reads [`ABSENT`](crate::map::ABSENT): the point is left to a
-//! ray.
+//! ray. (So a renderer may mark a sample of the receivers, their neighbours' pages being
+//! mostly the same: what it misses costs rays, not accuracy.)
 //!
 //! # Paraboloid maps
 //!

@@ -450,7 +450,7 @@ impl Renderer<'_> {
             .map(|b| {
                 let mut marks: Vec<Vec<Vec<u64>>> = vec![vec![Vec::new(); count]; lights.len()];
                 for i in b * w * ROWS..((b + 1) * w * ROWS).min(gbuffer.len()) {
-                    if (i % w) % step != 0 || (i / w) % step != 0 {
+                    if !(i % w).is_multiple_of(step) || !(i / w).is_multiple_of(step) {
                         continue;
                     }
                     let Some((p, ng, wo)) = self.receiver_geometry(gbuffer, i) else { continue };

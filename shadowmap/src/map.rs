@@ -194,10 +194,10 @@ impl Layout {
 /// Side of a page: a face's texels are stored, and paged maps drawn, in squares of this many
 /// texels per side.
 ///
-/// Why 32: a page is then 8 KB of ids and 4 KB of depths. A frame's receivers touch the pages
-/// around them, and the smaller the page, the fewer texels it holds that no receiver reads:
-/// on the thesis scenes 32 took a quarter less memory than 64 for the same levels. Smaller
-/// pages cost more per-page work (binning, setting up the triangles that straddle pages).
+/// Why 32: a page is then 4 KB of ids and 4 KB of depths. A frame's receivers touch the pages
+/// around them, and the smaller the page, the fewer texels it holds that no receiver reads
+/// (memory the budget would rather spend on finer levels); smaller pages cost more per-page
+/// work (binning, setting up the triangles that straddle pages).
 pub const PAGE: u32 = 32;
 
 /// Texels of one page.

@@ -173,8 +173,8 @@ struct FrameMaps {
 /// Why: marking is a pass over every camera hit and light, a large part of a first frame and of
 /// every moved view. A pixel's pages are almost always its neighbours' (they lie within the
 /// marking margin of a texel or two at the same level); a lookup that reaches a page no marked
-/// neighbour did reads `ABSENT` and is decided by a ray, exactly. On the thesis scenes, 2 cut
-/// the marking to a quarter for 0.3-5 % more border rays; 3 added 13 %.
+/// neighbour did reads `ABSENT` and is decided by a ray, exactly: a sample costs a few more
+/// border rays, and a sparser one more of them (the commit that chose 2 has the figures).
 const MARK_STEP: usize = 2;
 
 /// Level caps of paged maps marked in one pass over the camera hits, for lights whose pages do

@@ -1045,13 +1045,9 @@ impl LightMap {
         for level in (0..self.levels()).rev() {
             let res = f64::from(self.resolution_at(level));
             let (x, y) = ((u * res).max(0.0) as u32, (v * res).max(0.0) as u32);
-            if let Ok((f, i)) = self.texel(level, face, x, y)
-                && f.id[i] != EMPTY
-            {
-                return self.depth_at(level, face, x, y);
-            }
+            // The finest drawn page decides, empty or not.
             if self.texel(level, face, x, y).is_ok() {
-                return f32::INFINITY;
+                return self.depth_at(level, face, x, y);
             }
         }
         f32::INFINITY
@@ -1575,13 +1571,7 @@ fn bin_pages(
     // of its planes (the face culling of `cube_triangles`), else their NDC bounds and whether
     // one is behind the light.
     let project = |v: &[Vec4]| -> Option<NdcBounds> {
-        let all = |f: &dyn Fn(&Vec4) -> bool| v.iter().all(f);
-        if all(&|c| c.w < near)
-            || all(&|c| c.x > c.w)
-            || all(&|c| c.x < -c.w)
-            || all(&|c| c.y > c.w)
-            || all(&|c| c.y < -c.w)
-        {
+        if beyond_face(v, near) {
             return None;
         }
         let behind = v.iter().any(|c| c.w <= 0.0);
@@ -1679,6 +1669,19 @@ fn bin_pages(
     (offsets, ids)
 }
 
+/// Whether the clip-space points `v` of a cube face (`(d_s, d_t, near, sign d_axis)`) all lie
+/// beyond one of its planes, or all closer than the near plane (module docs): then nothing
+/// they bound reaches the face.
+#[inline]
+fn beyond_face(v: &[Vec4], near: f32) -> bool {
+    let all = |f: &dyn Fn(&Vec4) -> bool| v.iter().all(f);
+    all(&|c| c.w < near)
+        || all(&|c| c.x > c.w)
+        || all(&|c| c.x < -c.w)
+        || all(&|c| c.y > c.w)
+        || all(&|c| c.y < -c.w)
+}
+
 /// Clip-space triangles and ids of each drawn cube face (module docs), in input order: one pass
 /// over the triangles for all faces.
 fn cube_triangles(
@@ -1702,13 +1705,7 @@ fn cube_triangles(
                 let d = tris[id as usize].map(|p| p - light);
                 for &(f, (axis, sign, s, t)) in &faces {
                     let v = d.map(|d| Vec4::new(d[s], d[t], near, sign * d[axis]));
-                    let all = |f: &dyn Fn(&Vec4) -> bool| v.iter().all(f);
-                    if all(&|c| c.w < near)
-                        || all(&|c| c.x > c.w)
-                        || all(&|c| c.x < -c.w)
-                        || all(&|c| c.y > c.w)
-                        || all(&|c| c.y < -c.w)
-                    {
+                    if beyond_face(&v, near) {
                         continue;
                     }
                     out[f].0.push(v);

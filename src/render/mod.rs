@@ -197,8 +197,13 @@ impl<'a> Renderer<'a> {
             || a.map_detail != b.map_detail
             || a.map_budget != b.map_budget
         {
-            // Which pages (or faces) the view needs depends on all of these.
-            self.drop_light_maps(true);
+            // Which pages (or faces) the view needs depends on all of these but the resolution
+            // and tessellation of whole maps.
+            let needs = a.map.kind != b.map.kind
+                || a.light_maps != b.light_maps
+                || a.map_detail != b.map_detail
+                || a.map_budget != b.map_budget;
+            self.drop_light_maps(needs);
             dropped.push("light maps");
         }
         let (a, b) = (&old.indirect_opts, &options.indirect_opts);

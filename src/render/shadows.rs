@@ -348,15 +348,13 @@ impl Renderer<'_> {
 
     /// What marking needs of the camera hit of pixel `i` (where direct light is computed at
     /// all): its position, geometric normal (not flipped to the viewer) and the unit direction
-    /// back to the camera, bit for bit the `p`, `+-ng` and `wo` of its [`SurfaceHit`] (the
-    /// same expressions), without the shading normal's interpolation.
+    /// back to the camera, bit for bit the `p`, `+-ng` and `wo` of its [`SurfaceHit`] (made by
+    /// the same [`SurfaceHit::point`]), without the shading normal's interpolation.
     #[inline]
     fn receiver_geometry(&self, gbuffer: &[Option<Hit>], i: usize) -> Option<(Vec3, Vec3, Vec3)> {
         let w = self.scene.settings.width.max(1) as usize;
         let hit = gbuffer[i].as_ref().filter(|h| self.needs_light(h.tri))?;
-        let tri = &self.scene.positions[hit.tri as usize];
-        let (p, _) = hyrt_tracer::offset::hit_point(tri, hit.bary);
-        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+        let (p, _, ng) = SurfaceHit::point(&self.scene.positions[hit.tri as usize], hit);
         let wo = -self.camera_ray((i % w) as u32, (i / w) as u32).dir;
         Some((p, ng, wo))
     }
@@ -365,12 +363,6 @@ impl Renderer<'_> {
     pub(crate) fn paged_maps(&self) -> bool {
         let o = &self.options.shadow;
         o.light_maps == LightMaps::Paged && o.map.kind == MapKind::Cube
-    }
-
-    /// The level guide of paged maps for this camera (`hyrt_shadowmap::paged`): a pixel
-    /// subtends `2 tan(fov_y / 2) / height` radians at the image centre.
-    fn resolution_guide(&self) -> Resolution {
-        resolution_guide(&self.camera, &self.options.shadow)
     }
 
     /// What the camera hits of `gbuffer` need of the maps: per light the faces they fall on,
@@ -384,7 +376,7 @@ impl Renderer<'_> {
         let nl = self.lights.len();
         let budget_bytes = self.options.shadow.map_budget as usize * (1 << 20);
         let fits = |pages: usize| hyrt_shadowmap::paged_memory_bound(pages) <= budget_bytes;
-        let mut resolution = vec![self.resolution_guide(); nl];
+        let mut resolution = vec![resolution_guide(&self.camera, &self.options.shadow); nl];
         let mut pages = vec![Vec::new(); nl];
         // Most lights fit at their own levels: mark those alone first; then, for the lights
         // that did not fit, without the refinement for grazing light; then several caps at once.
@@ -983,8 +975,6 @@ impl Renderer<'_> {
         }
     }
 
-    /// Drops the cached light maps (made with other map options); with `kind_changed`, also
-    /// which faces camera hits fall on (faces differ between map kinds).
     /// Drops light `l`'s map (the light moved), keeping the others; which faces the camera
     /// needs is found again, since light `l`'s depend on where it is.
     pub(crate) fn drop_light_map(&mut self, l: usize) {
@@ -997,9 +987,12 @@ impl Renderer<'_> {
         self.maps.needed = std::sync::OnceLock::new();
     }
 
-    pub(crate) fn drop_light_maps(&mut self, kind_changed: bool) {
+    /// Drops the cached light maps (made with other map options); with `needs_changed`, also
+    /// which faces or pages camera hits need (they differ between map kinds and layouts, and
+    /// with the detail and budget of paged maps).
+    pub(crate) fn drop_light_maps(&mut self, needs_changed: bool) {
         self.maps.maps.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
-        if kind_changed {
+        if needs_changed {
             self.maps.needed = std::sync::OnceLock::new();
         }
     }

@@ -27,8 +27,7 @@ impl SurfaceHit {
     /// Builds the shading point of a tracer hit for a ray with unit direction `dir`.
     pub fn new(scene: &Scene, hit: &Hit, dir: Vec3) -> Self {
         let tri = scene.positions[hit.tri as usize];
-        let (p, p_err) = hit_point(&tri, hit.bary);
-        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+        let (p, p_err, ng) = Self::point(&tri, hit);
         let n = scene.normals[hit.tri as usize];
         let b = hit.bary;
         let ns = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize_or(ng);
@@ -42,5 +41,15 @@ impl SurfaceHit {
             ns = ng;
         }
         Self { tri: hit.tri, t: hit.t, p, p_err, ng, ns, wo }
+    }
+
+    /// The hit's point on triangle `tri`, its rounding bound, and the triangle's unit normal
+    /// (before any flip to the viewer): the part of [`SurfaceHit::new`] that needs neither the
+    /// ray nor the vertex normals.
+    #[inline]
+    pub(crate) fn point(tri: &[Vec3; 3], hit: &Hit) -> (Vec3, Vec3, Vec3) {
+        let (p, p_err) = hit_point(tri, hit.bary);
+        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+        (p, p_err, ng)
     }
 }

@@ -1513,7 +1513,8 @@ impl PageGroup {
 /// Per page of `pages` (sorted), the ids (in input order) of the usable triangles `valid` of its
 /// face whose image may reach it, as one list with offsets: each triangle is culled per face as
 /// [`cube_triangles`] does, then binned by its projected bounding box, grown by a texel of the
-/// page's level (rounding), into the marked pages it overlaps; a triangle with a vertex behind
+/// page's level (rounding), into the marked pages it overlaps, at the levels where those bounds
+/// hold a texel centre ([`holds_centre`]); a triangle with a vertex behind
 /// the light's plane of the face (an unbounded image) goes to every marked page of the face.
 /// One pass over the triangles for every face and level, in parallel chunks whose
 /// (page, triangle) pairs are then sorted by page, stably: the same bins for any thread count.
@@ -1585,6 +1586,7 @@ fn bin_pages(
     };
     let clip =
         |d: Vec3, (axis, sign, s, t): (usize, f32, usize, usize)| Vec4::new(d[s], d[t], near, sign * d[axis]);
+    let l = light.as_dvec3();
     let parts: Vec<Vec<(u32, u32)>> = valid
         .par_chunks(CLUSTER)
         .map(|cluster| {
@@ -1622,12 +1624,19 @@ fn bin_pages(
             }
             for &id in cluster {
                 let d = tris[id as usize].map(|p| p - light);
+                // The exact offsets, for the bounds of the image (f32's would be a texel off at
+                // the finest levels, and would need a margin that culls nothing there).
+                let e = tris[id as usize].map(|p| p.as_dvec3() - l);
                 for &(f, ax) in &live {
                     let v = d.map(|d| clip(d, ax));
-                    let Some((lo, hi, behind)) = project(&v) else { continue };
+                    if beyond_face(&v, near) {
+                        continue;
+                    }
+                    let behind = v.iter().any(|c| c.w <= 0.0);
+                    let (lo, hi) = image_bounds(&e, ax);
                     for g in &faces[f] {
                         let (x0, x1, y0, y1) = range(g, lo, hi, behind);
-                        if x0 > x1 || y0 > y1 {
+                        if x0 > x1 || y0 > y1 || (!behind && !holds_centre(g.level, lo, hi)) {
                             continue;
                         }
                         let span = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
@@ -1668,6 +1677,58 @@ fn bin_pages(
     }
     (offsets, ids)
 }
+
+/// The face NDC bounds `(lo, hi)` of the image of points `e` (offsets from the light, in front
+/// of it) on the face of axes `(axis, sign, s, t)` ([`CubeFace::axes`]).
+#[inline]
+fn image_bounds(e: &[DVec3], (axis, sign, s, t): (usize, f32, usize, usize)) -> ((f64, f64), (f64, f64)) {
+    let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+    for c in e {
+        let w = f64::from(sign) * c[axis];
+        let (x, y) = (c[s] / w, c[t] / w);
+        lo = (lo.0.min(x), lo.1.min(y));
+        hi = (hi.0.max(x), hi.1.max(y));
+    }
+    (lo, hi)
+}
+
+/// Whether an image with face NDC bounds `lo..hi` (all in front of the light) may cover a texel
+/// centre at `level`: whether, in both axes, its bounds grown by [`CENTRE_MARGIN`] hold one.
+/// An image that holds none in one axis covers none, and is not drawn (a small triangle far
+/// from the light, at a coarse level, where most of a dense mesh's triangles fall between
+/// texel centres).
+///
+/// Texel `i` of a face of `res` texels spans `u = (s + 1) res / 2` in `[i, i + 1)` (rows: `v =
+/// (1 - t) res / 2`), its centre at `i + 1/2`: the bounds `[a, b]` hold one if `ceil(a - 1/2 -
+/// m) <= floor(b - 1/2 + m)`.
+#[inline]
+fn holds_centre(level: u8, lo: (f64, f64), hi: (f64, f64)) -> bool {
+    let half = f64::from(PAGE << level) * 0.5;
+    // Whether an integer lies in `[a, b]`: `floor(b) >= a`. Clamped to where `i64` holds every
+    // integer exactly (a clamped bound keeps an integer in the interval if there was one, and
+    // faces are far smaller); NaN bounds (a degenerate image) are kept: the rasterizer decides.
+    // Not `f64::floor`, which is a library call without SSE4.1.
+    const BIG: f64 = (1u64 << 52) as f64;
+    let holds = |a: f64, b: f64| {
+        let (a, b) = ((a + 1.0) * half - 0.5 - CENTRE_MARGIN, (b + 1.0) * half - 0.5 + CENTRE_MARGIN);
+        if a.is_nan() || b.is_nan() {
+            return true;
+        }
+        let b = b.clamp(-BIG, BIG);
+        let t = b as i64;
+        let floor = t - i64::from(b < t as f64);
+        floor as f64 >= a
+    };
+    holds(lo.0, hi.0) && holds(-hi.1, -lo.1)
+}
+
+/// How far, in texels, [`holds_centre`] grows an image's bounds: they come from the exact offsets
+/// of the vertices from the light, in `f64`, so within about 2^-50 of a texel (face NDC within a
+/// few ulps, a face at most 2^22 texels); the rasterizer moves each vertex by at most half its
+/// subpixel step (2^-9 texel) when it snaps it, and `page_clip`'s rounding to `f32` moves it by
+/// less than 2^-17 texel where the image is this small (page-relative coordinates within a
+/// page or two of 0, rounded once). 2^-6 texel clears their sum four times over.
+const CENTRE_MARGIN: f64 = 1.0 / 64.0;
 
 /// Whether the clip-space points `v` of a cube face (`(d_s, d_t, near, sign d_axis)`) all lie
 /// beyond one of its planes, or all closer than the near plane (module docs): then nothing
@@ -1796,6 +1857,61 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn an_image_that_covers_a_texel_centre_is_never_culled() {
+        // Small triangles about page corners and edges at every level: wherever drawing the
+        // page (as `build_pages` does) covers a texel, `holds_centre` must say it may.
+        let mut rng = hyrt_testkit::Rng(0x5eed);
+        let mut rasterizer = Rasterizer::new();
+        let mut target = Target::default();
+        let (mut covered, mut culled) = (0, 0);
+        for i in 0..20_000u32 {
+            let level = (i % (u32::from(MAX_LEVEL) + 1)) as u8;
+            let n = 1u32 << level;
+            let face = (i % 6) as u8;
+            let (px, py) = (rng.below(n as usize) as u32, rng.below(n as usize) as u32);
+            let key = PageKey { level, face, py, px };
+            let ax = CubeFace::ALL[usize::from(face)].axes();
+            let (axis, sign, s, t) = ax;
+            // A point on the page, then a triangle about it a texel or so across.
+            let res = f64::from(PAGE << level);
+            let texel = |u: f64| u / res * 2.0 - 1.0;
+            let (u, v) = (
+                f64::from(px * PAGE) + rng.f64() * f64::from(PAGE),
+                f64::from(py * PAGE) + rng.f64() * f64::from(PAGE),
+            );
+            let dist = 0.5 + rng.f64() * 100.0;
+            let size = [0.3, 1.0, 3.0][i as usize % 3] / res * 2.0;
+            let mut vertex = || {
+                let (a, b) = (texel(u) + (rng.f64() - 0.5) * size, -texel(v) + (rng.f64() - 0.5) * size);
+                let mut d = DVec3::ZERO;
+                d[axis] = f64::from(sign) * dist;
+                (d[s], d[t]) = (a * dist, b * dist);
+                d.as_vec3()
+            };
+            let tri = [vertex(), vertex(), vertex()];
+            let e = tri.map(|p| p.as_dvec3());
+            let near = 1e-3;
+            rasterizer.rasterize_into(
+                &[page_clip(tri, DVec3::ZERO, near, &key, ax)],
+                &[0],
+                PAGE,
+                PAGE,
+                &MAP_RASTER,
+                &mut target,
+            );
+            let hits = target.id.contains(&0);
+            let (lo, hi) = image_bounds(&e, ax);
+            let holds = holds_centre(level, lo, hi);
+            assert!(holds || !hits, "triangle {i} at level {level} covers a texel but was culled: {tri:?}");
+            covered += u32::from(hits);
+            culled += u32::from(!holds);
+        }
+        // The test means something: both kinds occur.
+        println!("{covered} covering, {culled} culled");
+        assert!(covered > 2_000 && culled > 2_000, "{covered} covering, {culled} culled");
     }
 
     #[test]

@@ -120,10 +120,34 @@ impl Resolution {
     /// normal `n`: `r / max(cos_l, MIN_COS_LIGHT)` times the factor, `cos_l = |n . (L - p)| / r`.
     #[inline]
     pub fn level_for(&self, receiver: f32, p: Vec3, n: Vec3, light: Vec3) -> u8 {
+        self.level_from(receiver, LightTerms::of(p, n, light))
+    }
+
+    /// [`Resolution::level_for`] from the receiver's [`LightTerms`] (which do not depend on
+    /// the guide: several guides share them).
+    #[inline]
+    pub fn level_from(&self, receiver: f32, t: LightTerms) -> u8 {
+        let slant = t.cos_light.max(self.min_cos_light);
+        ceil_log2(t.r / slant * receiver).min(self.cap).min(MAX_LEVEL)
+    }
+}
+
+/// The parts of [`Resolution::level_for`] that depend on the receiver and the light alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightTerms {
+    /// The distance from the receiver to the light.
+    pub r: f32,
+    /// `|n . (L - p)| / r`.
+    pub cos_light: f32,
+}
+
+impl LightTerms {
+    /// The terms of a receiver at `p` with unit normal `n`, for a light at `light`.
+    #[inline]
+    pub fn of(p: Vec3, n: Vec3, light: Vec3) -> Self {
         let v = light - p;
         let r = v.length();
-        let slant = (n.dot(v).abs() / r).max(self.min_cos_light);
-        ceil_log2(r / slant * receiver).min(self.cap).min(MAX_LEVEL)
+        Self { r, cos_light: n.dot(v).abs() / r }
     }
 }
 
@@ -154,15 +178,41 @@ pub fn locate(dir: Vec3, level: u8) -> MapCoord {
 /// coordinate): one to four pages, on `c`'s face only (footprints that leave the face are left
 /// to rays).
 #[inline]
-pub fn pages_around(c: MapCoord, mut mark: impl FnMut(PageKey)) {
-    let n = 1u32 << c.level.min(MAX_LEVEL);
-    // Truncation is the floor here (the value is clamped to >= 0 first; NaN gives 0).
-    let page = |v: f64| ((v.max(0.0) / f64::from(PAGE)) as u32).min(n - 1);
-    let (x0, x1) = (page(c.x - MARGIN), page(c.x + MARGIN));
-    let (y0, y1) = (page(c.y - MARGIN), page(c.y + MARGIN));
-    for py in y0..=y1 {
-        for px in x0..=x1 {
-            mark(PageKey { level: c.level, face: c.face, py, px });
+pub fn pages_around(c: MapCoord, mark: impl FnMut(PageKey)) {
+    PageRect::around(c).for_each(mark);
+}
+
+/// A rectangle of pages of one level and face: pages `x0..=x1` by `y0..=y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PageRect {
+    pub level: u8,
+    pub face: u8,
+    pub x0: u32,
+    pub x1: u32,
+    pub y0: u32,
+    pub y1: u32,
+}
+
+impl PageRect {
+    /// The pages within [`MARGIN`] texels of `c` ([`pages_around`]): neighbouring receivers
+    /// mostly have the same rectangle, which a marker compares instead of its pages.
+    #[inline]
+    pub fn around(c: MapCoord) -> Self {
+        let n = 1u32 << c.level.min(MAX_LEVEL);
+        // Truncation is the floor here (the value is clamped to >= 0 first; NaN gives 0).
+        let page = |v: f64| ((v.max(0.0) / f64::from(PAGE)) as u32).min(n - 1);
+        let (x0, x1) = (page(c.x - MARGIN), page(c.x + MARGIN));
+        let (y0, y1) = (page(c.y - MARGIN), page(c.y + MARGIN));
+        Self { level: c.level, face: c.face, x0, x1, y0, y1 }
+    }
+
+    /// Calls `mark` with each page of the rectangle.
+    #[inline]
+    pub fn for_each(self, mut mark: impl FnMut(PageKey)) {
+        for py in self.y0..=self.y1 {
+            for px in self.x0..=self.x1 {
+                mark(PageKey { level: self.level, face: self.face, py, px });
+            }
         }
     }
 }

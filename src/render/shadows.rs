@@ -29,10 +29,10 @@ use std::time::Instant;
 
 use glam::Vec3;
 use hyrt_shadowmap::{
-    EMPTY, LightMap, MapKind, PageKey,
+    EMPTY, LightMap, MapCoord, MapKind, PageKey,
     classify::Decision,
     classify::{Classifier, Hull, Lookup, Plane},
-    paged::{self, Resolution, pages_around},
+    paged::{self, LightTerms, PageRect, Resolution},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
 use rayon::prelude::*;
@@ -153,6 +153,18 @@ pub(crate) struct Needs {
 pub fn resolution_guide(camera: &crate::camera::CameraRays, shadow: &super::ShadowOptions) -> Resolution {
     let pixel = 2.0 * camera.tan_y / camera.height.max(1) as f32;
     Resolution::new(camera.eye, pixel, shadow.map_detail)
+}
+
+/// A paged light map's pages to draw for a frame ([`Renderer::light_maps`]).
+struct PageJob {
+    light: usize,
+    draw: Vec<PageKey>,
+    /// What is done with the cached map, and why.
+    why: (Cache, String),
+    /// The pages in use, for the decision.
+    in_use: String,
+    /// The index of the light's decision.
+    decision: usize,
 }
 
 /// What the map-build pass made for a frame.
@@ -366,9 +378,10 @@ impl Renderer<'_> {
     }
 
     /// What the camera hits of `gbuffer` need of the maps: per light the faces they fall on,
-    /// and for paged maps the pages; a light whose pages exceed the budget has its finest
-    /// levels capped, a level at a time, until they fit (the receivers that need the finest
-    /// texels give them up first; the others keep theirs).
+    /// and for paged maps the pages; a light whose pages exceed the budget gives up the
+    /// refinement for grazing light first, then has its finest levels capped, a level at a
+    /// time, until they fit (the receivers that need the finest texels give them up first;
+    /// the others keep theirs).
     fn needs(&self, gbuffer: &[Option<Hit>]) -> Needs {
         if !self.paged_maps() {
             return Needs { faces: self.needed_faces(gbuffer), ..Needs::default() };
@@ -376,41 +389,38 @@ impl Renderer<'_> {
         let nl = self.lights.len();
         let budget_bytes = self.options.shadow.map_budget as usize * (1 << 20);
         let fits = |pages: usize| hyrt_shadowmap::paged_memory_bound(pages) <= budget_bytes;
-        let mut resolution = vec![resolution_guide(&self.camera, &self.options.shadow); nl];
+        let guide = resolution_guide(&self.camera, &self.options.shadow);
+        let unrefined = Resolution { min_cos_light: 1.0, ..guide };
+        let mut resolution = vec![guide; nl];
         let mut pages = vec![Vec::new(); nl];
-        // Most lights fit at their own levels: mark those alone first; then, for the lights
-        // that did not fit, without the refinement for grazing light; then several caps at once.
-        let mut todo: Vec<usize> = Vec::new();
-        let marked = self.mark_pages(gbuffer, &(0..nl).collect::<Vec<_>>(), &resolution, 1);
-        for (l, sets) in marked.into_iter().enumerate() {
-            let set = sets.into_iter().next().unwrap_or_default();
-            if fits(set.len()) {
-                pages[l] = set;
-            } else {
-                resolution[l].min_cos_light = 1.0;
-                todo.push(l);
-            }
-        }
-        let mut count = 1;
+        // One pass over the hits marks every light with and without the refinement for grazing
+        // light (a light over the budget with it mostly fits without); then, for the lights that
+        // still do not fit, several caps at once, until one fits.
+        let all: Vec<usize> = (0..nl).collect();
+        let mut variants: Vec<Vec<Resolution>> = vec![vec![guide, unrefined]; nl];
+        let mut todo = all;
         while !todo.is_empty() {
-            let marked = self.mark_pages(gbuffer, &todo, &resolution, count);
+            let marked = self.mark_pages(gbuffer, &todo, &variants);
             let mut next = Vec::new();
             for (&l, sets) in todo.iter().zip(marked) {
-                let cap = resolution[l].cap;
-                // The least capping that fits; else the finest level of the last one tried
+                // The first variant that fits; else the finest level of the last one tried
                 // less one, next time round (unless at level 0 already).
+                let tried = &variants[l];
                 let fit = sets.iter().position(|p| fits(p.len()));
                 let c = fit.unwrap_or(sets.len() - 1);
+                resolution[l] = tried[c];
                 let finest = sets[c].iter().map(|k| k.level).max().unwrap_or(0);
-                resolution[l].cap = cap.saturating_sub(c as u8);
                 if fit.is_none() && finest > 0 {
-                    resolution[l].cap = finest - 1;
+                    let cap = finest - 1;
+                    variants[l] = (0..COARSER as u8)
+                        .map(|j| Resolution { cap: cap.saturating_sub(j), ..tried[c] })
+                        .collect();
+                    variants[l].dedup();
                     next.push(l);
                 } else {
                     pages[l] = sets.into_iter().nth(c).unwrap_or_default();
                 }
             }
-            count = COARSER;
             todo = next;
         }
         let nf = LightMap::face_count(MapKind::Cube);
@@ -421,34 +431,37 @@ impl Renderer<'_> {
         Needs { faces, pages, resolution }
     }
 
-    /// For each light `l` of `lights`, the pages (sorted) under the camera hits that face it
-    /// ([`pages_around`]) at the levels `resolution[l]` gives them, and with the cap one, two,
-    /// ... `count - 1` levels lower: one pass over the hits for several budgets.
+    /// For each light `l` of `lights` and each level guide of `variants[l]`, the pages (sorted)
+    /// under the camera hits that face it ([`pages_around`]) at the levels that guide gives
+    /// them: one pass over the hits for several guides.
     fn mark_pages(
         &self,
         gbuffer: &[Option<Hit>],
         lights: &[usize],
-        resolution: &[Resolution],
-        count: usize,
+        variants: &[Vec<Resolution>],
     ) -> Vec<Vec<Vec<PageKey>>> {
         let w = self.scene.settings.width.max(1) as usize;
         // A sample of the hits where rays decide what it misses; every hit for maps alone.
         let step = if self.options.shadows == Shadows::Smerts { MARK_STEP } else { 1 };
+        // The receiver's factor is the same for every light and guide (one camera).
+        let guide = lights.first().and_then(|&l| variants[l].first()).copied();
         // Bands of rows in parallel, each marking packed keys with neighbours' repeats skipped;
-        // then per light and cap one sort of all the bands' keys.
+        // then per light and guide one sort of all the bands' keys.
         const ROWS: usize = 8;
         let bands: Vec<Vec<Vec<Vec<u64>>>> = (0..gbuffer.len().div_ceil(w * ROWS))
             .into_par_iter()
             .map(|b| {
-                let mut marks: Vec<Vec<Vec<u64>>> = vec![vec![Vec::new(); count]; lights.len()];
+                let mut marks: Vec<Vec<Vec<u64>>> =
+                    lights.iter().map(|&l| vec![Vec::new(); variants[l].len()]).collect();
+                let mut lasts: Vec<Vec<Option<PageRect>>> =
+                    lights.iter().map(|&l| vec![None; variants[l].len()]).collect();
                 for i in b * w * ROWS..((b + 1) * w * ROWS).min(gbuffer.len()) {
                     if !(i % w).is_multiple_of(step) || !(i / w).is_multiple_of(step) {
                         continue;
                     }
                     let Some((p, ng, wo)) = self.receiver_geometry(gbuffer, i) else { continue };
-                    // The receiver's factor is the same for every light.
                     let view = ng.dot(wo);
-                    let recv = resolution.first().map_or(0.0, |g| g.receiver(p, view));
+                    let recv = guide.map_or(0.0, |g| g.receiver(p, view));
                     for (k, &l) in lights.iter().enumerate() {
                         let light = &self.lights[l];
                         // A superset of the lights classification decides (`facing` and the
@@ -461,16 +474,22 @@ impl Renderer<'_> {
                         {
                             continue;
                         }
-                        let g = &resolution[l];
-                        let level = g.level_for(recv, p, ng, light.position);
-                        let mut c = paged::locate(p - light.position, level);
-                        for (j, out) in marks[k].iter_mut().enumerate() {
-                            let lv = level.min(g.cap.saturating_sub(j as u8));
-                            if lv != c.level {
-                                c = paged::locate(p - light.position, lv);
+                        let terms = LightTerms::of(p, ng, light.position);
+                        let mut c: Option<MapCoord> = None;
+                        for ((g, out), last) in variants[l].iter().zip(&mut marks[k]).zip(&mut lasts[k]) {
+                            let level = g.level_from(recv, terms);
+                            let c = match c {
+                                Some(c) if c.level == level => c,
+                                _ => *c.insert(paged::locate(p - light.position, level)),
+                            };
+                            // Neighbouring pixels mostly mark the same pages: skip the repeats
+                            // (the previous receiver's pages, and the last few marked).
+                            let rect = PageRect::around(c);
+                            if *last == Some(rect) {
+                                continue;
                             }
-                            // Neighbouring pixels mostly mark the same pages: skip the repeats.
-                            pages_around(c, |key| {
+                            *last = Some(rect);
+                            rect.for_each(|key| {
                                 let key = key.pack();
                                 if !out.iter().rev().take(4).any(|&o| o == key) {
                                     out.push(key);
@@ -485,7 +504,7 @@ impl Renderer<'_> {
         (0..lights.len())
             .into_par_iter()
             .map(|k| {
-                (0..count)
+                (0..variants[lights[k]].len())
                     .map(|j| {
                         let mut all: Vec<u64> = bands.iter().flat_map(|r| r[k][j].iter().copied()).collect();
                         all.sort_unstable();
@@ -547,6 +566,7 @@ impl Renderer<'_> {
         moved.resize(lights.len(), false);
         let mut built = 0;
         let mut decisions = Vec::with_capacity(lights.len());
+        let mut jobs: Vec<PageJob> = Vec::new();
         for (l, light) in lights.iter().enumerate() {
             let want = &needed.faces[l * nf..(l + 1) * nf];
             let have = cache[l].as_ref().map(|m| m.faces_drawn().to_vec());
@@ -614,42 +634,29 @@ impl Renderer<'_> {
                     decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
                     continue;
                 }
-                let t = Instant::now();
                 let was_moved = std::mem::take(&mut moved[l]);
-                let draw = if fresh { want.as_slice() } else { missing.as_slice() };
-                let map = LightMap::build_pages(
-                    &self.scene.positions,
-                    light.position,
-                    &self.options.shadow.map,
-                    draw,
-                    self.plane_groups().0,
-                );
+                let draw = if fresh { want.clone() } else { missing };
                 page_counts[l] = [want.len() as u32, draw.len() as u32];
-                let (done, why) = match (&mut cache[l], fresh) {
-                    (Some(m), false) => {
-                        Arc::make_mut(m).merge(map);
-                        let evicted = match evicted {
-                            0 => String::new(),
-                            e => format!(", {e} unused page(s) dropped for the budget"),
-                        };
-                        (
-                            Cache::Extended,
-                            format!(
-                                "map extended: {} new page(s) drawn for this view, {} reused{evicted}",
-                                draw.len(),
-                                want.len() - draw.len()
-                            ),
-                        )
-                    }
-                    (slot, _) => {
-                        *slot = Some(Arc::new(map));
-                        let why = if was_moved { "map rebuilt: the light moved" } else { "map built" };
-                        (Cache::Built, format!("{why}: {} page(s) drawn", draw.len()))
-                    }
+                let why = if !fresh {
+                    let evicted = match evicted {
+                        0 => String::new(),
+                        e => format!(", {e} unused page(s) dropped for the budget"),
+                    };
+                    (
+                        Cache::Extended,
+                        format!(
+                            "map extended: {} new page(s) drawn for this view, {} reused{evicted}",
+                            draw.len(),
+                            want.len() - draw.len()
+                        ),
+                    )
+                } else {
+                    let why = if was_moved { "map rebuilt: the light moved" } else { "map built" };
+                    (Cache::Built, format!("{why}: {} page(s) drawn", draw.len()))
                 };
-                built += 1;
-                let reason = format!("{why} ({in_use}) in {:.1} ms", super::ms(t));
-                decisions.push(FrameDecision::new(what, true, reason).with_cache(done));
+                // Drawn below, with the other lights' pages.
+                jobs.push(PageJob { light: l, draw, why, in_use, decision: decisions.len() });
+                decisions.push(FrameDecision::new(what, true, String::new()));
                 continue;
             }
             // The light is in use either way; the reason says whether its map was rebuilt.
@@ -695,6 +702,34 @@ impl Renderer<'_> {
             } else {
                 decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
             }
+        }
+        // The lights' pages drawn concurrently: each build has serial steps (binning's sort,
+        // the page tables) that another light's drawing fills.
+        let groups = if jobs.is_empty() { &[][..] } else { self.plane_groups().0 };
+        let drawn: Vec<(LightMap, f64)> = jobs
+            .par_iter()
+            .map(|job| {
+                let t = Instant::now();
+                let map = LightMap::build_pages(
+                    &self.scene.positions,
+                    lights[job.light].position,
+                    &self.options.shadow.map,
+                    &job.draw,
+                    groups,
+                );
+                (map, super::ms(t))
+            })
+            .collect();
+        for (job, (map, ms)) in jobs.into_iter().zip(drawn) {
+            match &mut cache[job.light] {
+                Some(m) if job.why.0 == Cache::Extended => Arc::make_mut(m).merge(map),
+                slot => *slot = Some(Arc::new(map)),
+            }
+            built += 1;
+            let (done, why) = job.why;
+            let reason = format!("{why} ({}) in {ms:.1} ms", job.in_use);
+            let d = &mut decisions[job.decision];
+            *d = FrameDecision::new(std::mem::take(&mut d.what), true, reason).with_cache(done);
         }
         FrameMaps {
             maps: cache.iter().map(|m| m.clone().expect("built above")).collect(),

@@ -841,12 +841,11 @@ impl Renderer<'_> {
                     levels.extend(tile.iter().zip(&recv).map(|((_, s), &f)| level(l, f, s)));
                     let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
                         let own = tile[0].1.tri;
-                        // The tile test reads one level: a tile whose points need different
-                        // levels is decided point by point.
-                        if levels.iter().any(|&v| v != levels[0]) {
-                            return Hull::Unknown;
-                        }
-                        c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)), levels[0])
+                        // The tile test reads one level: the finest its points need (each
+                        // point then gets texels at least as fine as its own level's; where
+                        // that level's pages do not cover the tile, the test cannot tell).
+                        let finest = levels.iter().copied().max().unwrap_or(0);
+                        c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)), finest)
                     });
                     if hull != Hull::Unknown {
                         let lit_all = hull == Hull::Lit;

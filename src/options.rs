@@ -279,7 +279,7 @@ impl Default for ShadowOptions {
             map: MapOptions { resolution: 2048, ..MapOptions::default() },
             light_maps: LightMaps::Paged,
             map_detail: 1.5,
-            map_budget: 16,
+            map_budget: 10,
             bias: 1.0,
             borders: Borders::MapSpace,
             dilate: 0,

@@ -129,7 +129,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
                     level,
                     x: c.x,
                     y: c.y,
-                    depth: m.depth_at(level, lookup.face, tx, ty),
+                    depth: cls.depth_at(level, lookup.face, tx, ty),
                     id: m.id_at(level, lookup.face, tx, ty),
                     distance: (s.p - light.position).length(),
                     lookup,

@@ -18,7 +18,11 @@ use hyrt::{
     metrics::luminance,
     render::shadows::{RAY_HINT, RAY_NONE, RAY_TRAVERSAL},
 };
-use hyrt_shadowmap::{LightMap, classify::Decision, vpl_map::VplMap};
+use hyrt_shadowmap::{
+    LightMap,
+    classify::{Classifier, Decision, Plane},
+    vpl_map::VplMap,
+};
 use hyrt_tracer::RayCounts;
 
 pub const LIT_COLOR: Color32 = Color32::from_rgb(250, 210, 80);
@@ -194,8 +198,15 @@ pub fn ray_heat(rays: &[RayCounts], kind: RayKindView, width: u32, height: u32) 
 
 /// A light map's face as an image of at most `max_side` pixels a side (texels sampled at the
 /// image pixels' centres), depth on a log viridis scale between `range` (near, far); `None` when
-/// the face was not drawn.
-pub fn depth_face_image(map: &LightMap, face: u8, max_side: u32, range: (f32, f32)) -> Option<ColorImage> {
+/// the face was not drawn. `planes`: the map's triangles' planes (a paged map's depths come
+/// from them).
+pub fn depth_face_image(
+    map: &LightMap,
+    planes: &[Plane],
+    face: u8,
+    max_side: u32,
+    range: (f32, f32),
+) -> Option<ColorImage> {
     if !map.faces_drawn().get(usize::from(face)).copied().unwrap_or(false) {
         return None;
     }
@@ -203,7 +214,9 @@ pub fn depth_face_image(map: &LightMap, face: u8, max_side: u32, range: (f32, f3
         // Paged: each image pixel from the finest page drawn under it.
         let res = max_side.max(1);
         let at = |i: u32| (f64::from(i) + 0.5) / f64::from(res);
-        return Some(depth_image(res, max_side, range, |x, y| Some(map.depth_finest(face, at(x), at(y)))));
+        return Some(depth_image(res, max_side, range, |x, y| {
+            Some(paged_depth(map, planes, face, at(x), at(y)))
+        }));
     }
     Some(depth_image(map.resolution(), max_side, range, |x, y| {
         map.texel_in_domain(face, x, y).then(|| map.depth(face, x, y))
@@ -238,15 +251,22 @@ fn texel_of(i: u32, side: u32, res: u32) -> u32 {
     (((u64::from(i) * 2 + 1) * u64::from(res) / (2 * u64::from(side))) as u32).min(res - 1)
 }
 
+/// The depth a paged map shows at face position `(u, v)`: its finest drawn texel's there,
+/// from the plane of the texel's triangle (paged maps store no depths).
+fn paged_depth(map: &LightMap, planes: &[Plane], face: u8, u: f64, v: f64) -> f32 {
+    let cls = Classifier { map, planes, bias: 0.0, point_error: 0.0 };
+    map.finest_texel(face, u, v).map_or(f32::INFINITY, |(level, x, y)| cls.depth_at(level, face, x, y))
+}
+
 /// Nearest and farthest finite depths of the drawn faces, over the texels a `max_side` image
-/// samples; `None` when nothing was drawn.
-pub fn depth_range(map: &LightMap, max_side: u32) -> Option<(f32, f32)> {
+/// samples; `None` when nothing was drawn. `planes` as for [`depth_face_image`].
+pub fn depth_range(map: &LightMap, planes: &[Plane], max_side: u32) -> Option<(f32, f32)> {
     let faces: Vec<u8> = (0..map.faces() as u8).filter(|&f| map.faces_drawn()[usize::from(f)]).collect();
     if map.is_paged() {
         let res = max_side.max(1);
         let at = |i: u32| (f64::from(i) + 0.5) / f64::from(res);
         return range_of(res, max_side, |x, y| {
-            faces.iter().map(|&f| map.depth_finest(f, at(x), at(y))).collect()
+            faces.iter().map(|&f| paged_depth(map, planes, f, at(x), at(y))).collect()
         });
     }
     range_of(map.resolution(), max_side, |x, y| faces.iter().map(|&f| map.depth(f, x, y)).collect())
@@ -474,11 +494,11 @@ mod tests {
             let opts = MapOptions { kind, resolution: 64, ..MapOptions::default() };
             let nf = LightMap::face_count(kind);
             let map = LightMap::build(&tris, Vec3::ZERO, &opts, &vec![true; nf]);
-            let range = depth_range(&map, 32).expect("wall drawn");
+            let range = depth_range(&map, &[], 32).expect("wall drawn");
             assert!((range.0 - 1.0).abs() < 0.05, "{kind:?} {range:?}");
             assert!(range.1 > 2.0, "{kind:?} {range:?}");
             let front = map.coord(Vec3::NEG_Z).face;
-            let img = depth_face_image(&map, front, 32, range).expect("drawn");
+            let img = depth_face_image(&map, &[], front, 32, range).expect("drawn");
             assert_eq!(img.size, [32, 32]);
             // The centre looks straight at the wall: the nearest texels.
             let centre = img.pixels[16 * 32 + 16];
@@ -490,7 +510,7 @@ mod tests {
             // The face looking away is empty: black (paraboloid: grey outside its disc).
             let back = map.coord(Vec3::Z).face;
             assert_ne!(back, front);
-            let img = depth_face_image(&map, back, 32, range).expect("drawn");
+            let img = depth_face_image(&map, &[], back, 32, range).expect("drawn");
             assert_eq!(img.pixels[16 * 32 + 16], Color32::BLACK);
             let corner = if kind == MapKind::Cube { Color32::BLACK } else { OUTSIDE_COLOR };
             assert_eq!(img.pixels[0], corner);
@@ -501,9 +521,10 @@ mod tests {
         faces[LightMap::face_of(MapKind::Cube, Vec3::NEG_Z) as usize] = true;
         let map = LightMap::build(&tris, Vec3::ZERO, &opts, &faces);
         let back = LightMap::face_of(MapKind::Cube, Vec3::Z);
-        assert!(depth_face_image(&map, back, 16, (1.0, 2.0)).is_none());
+        assert!(depth_face_image(&map, &[], back, 16, (1.0, 2.0)).is_none());
         assert!(
-            depth_face_image(&map, LightMap::face_of(MapKind::Cube, Vec3::NEG_Z), 16, (1.0, 2.0)).is_some()
+            depth_face_image(&map, &[], LightMap::face_of(MapKind::Cube, Vec3::NEG_Z), 16, (1.0, 2.0))
+                .is_some()
         );
     }
 

@@ -482,7 +482,7 @@ impl State<'_> {
         };
         let (vpls, vpl_maps) = renderer.cached_vpls().map_or((Vec::new(), 0), |(v, m)| (v.to_vec(), m.len()));
         let images = if full {
-            images(&frame, &maps, exposure, w, h)
+            images(&frame, &maps, renderer.occluders().0, exposure, w, h)
         } else {
             Images {
                 hybrid: views::film_image(&frame.film, exposure),
@@ -571,7 +571,14 @@ fn comparison(reference: Arc<Reference>, rendered: bool, film: &Film, scene: &Sc
 }
 
 /// Every image of the frame's views.
-fn images(frame: &Frame, maps: &[Option<Arc<LightMap>>], exposure: f32, w: u32, h: u32) -> Images {
+fn images(
+    frame: &Frame,
+    maps: &[Option<Arc<LightMap>>],
+    planes: &[Plane],
+    exposure: f32,
+    w: u32,
+    h: u32,
+) -> Images {
     let back = views::backdrop(&frame.film, exposure);
     let lights = frame.shadows.as_ref().map_or_else(Vec::new, |b| {
         (0..b.occ.len())
@@ -601,10 +608,11 @@ fn images(frame: &Frame, maps: &[Option<Arc<LightMap>>], exposure: f32, w: u32, 
         .iter()
         .map(|m| {
             m.as_ref().map(|m| {
-                let range = views::depth_range(m, MAP_IMAGE_SIDE);
+                let range = views::depth_range(m, planes, MAP_IMAGE_SIDE);
                 let r = range.unwrap_or((1.0, 2.0));
-                let faces =
-                    (0..m.faces() as u8).map(|f| views::depth_face_image(m, f, MAP_IMAGE_SIDE, r)).collect();
+                let faces = (0..m.faces() as u8)
+                    .map(|f| views::depth_face_image(m, planes, f, MAP_IMAGE_SIDE, r))
+                    .collect();
                 MapImages { faces, range }
             })
         })

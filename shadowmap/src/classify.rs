@@ -241,6 +241,23 @@ pub struct Classifier<'a> {
 }
 
 impl Classifier<'_> {
+    /// The distance from the light to the surface texel `(x, y)` of `face` at `level` holds,
+    /// along the texel centre's direction: the stored depth ([`LightMap::depth_at`]) where the
+    /// map has one, else (a paged map) where that direction meets the plane of the texel's
+    /// triangle. `f32::INFINITY` for an empty texel or one not drawn; NaN where the plane is
+    /// seen edge-on and no depth is stored.
+    pub fn depth_at(&self, level: u8, face: u8, x: u32, y: u32) -> f32 {
+        let d = self.map.depth_at(level, face, x, y);
+        if !d.is_nan() {
+            return d;
+        }
+        let id = self.map.id_at(level, face, x, y);
+        let Some(pl) = self.planes.get(id as usize).filter(|pl| pl.n != Vec3::ZERO) else { return f32::NAN };
+        let dir = self.map.texel_dir_at(face, level, f64::from(x) + 0.5, f64::from(y) + 0.5);
+        let cos = pl.n.dot(dir);
+        if cos.abs() < 1e-6 { f32::NAN } else { (pl.offset_from(self.map.light()) / f64::from(cos)) as f32 }
+    }
+
     /// Classifies point `p` of triangle `own` (module docs). `p` must differ from the light.
     #[inline]
     pub fn classify(&self, p: Vec3, own: u32) -> Lookup {
@@ -533,7 +550,11 @@ impl Classifier<'_> {
             let (t, tol) = if cos.abs() >= 1e-6 {
                 ((pl.offset_from(light) / f64::from(cos)) as f32, DIRECTION_ROUNDING * r / cos.abs())
             } else {
-                (map.depth_at(c.level, c.face, x, y), tol)
+                match map.depth_at(c.level, c.face, x, y) {
+                    // No depth stored (a paged map): a ray decides.
+                    d if d.is_nan() => return AMBIGUOUS,
+                    d => (d, tol),
+                }
             };
             if !(t > near && t < r - tol) {
                 LIT
@@ -630,7 +651,7 @@ impl<'c, 'a> Occluders<'c, 'a> {
     /// Whether triangle `id` (not empty, not the point's own), seen at texel `(x, y)`, leaves
     /// the point visible: it meets the ray from the light beyond the margin band, or within
     /// `SHADOW_EPSILON r` of the light; an occluder within the band counts as the point's own
-    /// surface.
+    /// surface, and so does one seen edge-on where the map stores no depth (a paged map).
     #[inline]
     fn visible(&self, id: u32, (x, y): (u32, u32)) -> bool {
         let pl = self.cls.planes.get(id as usize).copied().unwrap_or(Plane::ZERO);

@@ -19,7 +19,11 @@
 //! A face is drawn in clip space `(d_s, d_t, near, ±d_axis)` with `d = p - light`, so NDC is
 //! `(s, t)` and the rasterizer's reversed-Z depth is `near / w`, `w` the distance along the face
 //! axis; the texel stores the distance along its centre's direction,
-//! `near / depth * sqrt(1 + s^2 + t^2)` with `(s, t)` the centre's face coordinates.
+//! `near / depth * sqrt(1 + s^2 + t^2)` with `(s, t)` the centre's face coordinates. A paged
+//! map ([`LightMap::build_pages`]) stores ids only, half the memory: decisions use the
+//! triangles' planes, and the stored depth only where a plane is seen edge-on, which for a
+//! paged map is left to a ray; its distances come from the planes
+//! ([`Classifier::depth_at`](crate::classify::Classifier::depth_at)).
 //! Each face draws only the triangles that can reach its frustum: a triangle with all three
 //! vertices beyond the same side plane (`d_s > w`, `d_s < -w`, `d_t > w` or `d_t < -w`) or all
 //! closer than the near plane along the axis (`w < near`: behind the light) is skipped.
@@ -194,7 +198,7 @@ impl Layout {
 /// Side of a page: a face's texels are stored, and paged maps drawn, in squares of this many
 /// texels per side.
 ///
-/// Why 32: a page is then 4 KB of ids and 4 KB of depths. A frame's receivers touch the pages
+/// Why 32: a page is then 4 KB of ids (and, in a whole map, 4 KB of depths). A frame's receivers touch the pages
 /// around them, and the smaller the page, the fewer texels it holds that no receiver reads
 /// (memory the budget would rather spend on finer levels); smaller pages cost more per-page
 /// work (binning, setting up the triangles that straddle pages).
@@ -263,11 +267,11 @@ impl PageKey {
 const DENSE_PAGES: usize = 1 << 12;
 
 /// The most memory ([`LightMap::memory_bytes`]) that a paged cube map of `pages` pages can
-/// take, wherever they lie: per page its ids, depths, both region summaries and its page-table
+/// take, wherever they lie: per page its ids (a paged map stores no depths), both region summaries and its page-table
 /// entry, plus the dense page tables of the coarse levels (allocated whole once a level of a
 /// face holds a page). For sizing maps under a memory budget.
 pub fn paged_memory_bound(pages: usize) -> usize {
-    let per_page = PAGE_TEXELS * 8 + PAGE_REGIONS * 8 + 8;
+    let per_page = PAGE_TEXELS * 4 + PAGE_REGIONS * 8 + 8;
     let dense_levels = (0..=MAX_LEVEL).filter(|&k| (1usize << (2 * k)) <= DENSE_PAGES).count();
     pages * per_page + dense_levels * 6 * DENSE_PAGES * 4
 }
@@ -289,8 +293,11 @@ struct Face {
     sparse: rustc_hash::FxHashMap<u32, u32>,
     /// Per slot, [`PAGE_TEXELS`] ids, row-major.
     id: Vec<u32>,
-    /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major:
-    /// distances are made from them only when asked for ([`LightMap::depth_at`]), which the
+    /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major;
+    /// empty in a paged map, whose texels' distances come from their triangles' planes
+    /// ([`Classifier::depth_at`](crate::classify::Classifier::depth_at)): the classifier reads
+    /// stored depths only for planes seen edge-on, where a ray decides instead. Distances are
+    /// made from them only when asked for ([`LightMap::depth_at`]), which the
     /// classifier does only for planes seen edge-on.
     depth: Vec<f32>,
     /// Per slot, [`PAGE_REGIONS`] [`REGION`]-square blocks, row-major: the one triangle its
@@ -492,6 +499,9 @@ const MAP_RASTER: RasterOptions = RasterOptions {
     ..RasterOptions::DEFAULT
 };
 
+/// [`MAP_RASTER`] for the pages of paged maps: ids only (the depth test runs all the same).
+const PAGE_RASTER: RasterOptions = RasterOptions { depth: false, ..MAP_RASTER };
+
 impl LightMap {
     /// Number of faces of a point-light map of this kind (6 or 2).
     pub fn face_count(kind: MapKind) -> usize {
@@ -674,7 +684,6 @@ impl LightMap {
         for face in map.faces.iter_mut().filter(|f| !f.is_empty()) {
             let n = face.pages();
             face.id = vec![0; n * PAGE_TEXELS];
-            face.depth = vec![0.0; n * PAGE_TEXELS];
             face.region = vec![0; n * PAGE_REGIONS];
             face.region_group = if with_groups { vec![0; n * PAGE_REGIONS] } else { Vec::new() };
         }
@@ -688,10 +697,9 @@ impl LightMap {
             slots.extend(
                 face.id
                     .chunks_mut(PAGE_TEXELS)
-                    .zip(face.depth.chunks_mut(PAGE_TEXELS))
                     .zip(face.region.chunks_mut(PAGE_REGIONS))
                     .zip(groups_out)
-                    .map(|(((a, b), c), d)| (a, b, c, d)),
+                    .map(|((a, c), d)| (a, c, d)),
             );
         }
         // Faces are in (level, face) order and their slots in `pages` order: so is `slots`.
@@ -701,19 +709,17 @@ impl LightMap {
             .enumerate()
             .map_init(
                 || (Rasterizer::new(), Target::default(), Vec::new(), Vec::new(), Vec::new()),
-                |(rasterizer, target, tris_out, region, region_group),
-                 (i, (key, (id, depth, reg, reg_g)))| {
+                |(rasterizer, target, tris_out, region, region_group), (i, (key, (id, reg, reg_g)))| {
                     let bin = &binned[offsets[i]..offsets[i + 1]];
                     let (axis, sign, s, t) = CubeFace::ALL[usize::from(key.face)].axes();
                     tris_out.clear();
                     tris_out.extend(
                         bin.iter().map(|&id| page_clip(tris[id as usize], l, near, key, (axis, sign, s, t))),
                     );
-                    rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &MAP_RASTER, target);
+                    rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &PAGE_RASTER, target);
                     // The page is the target itself: a cube face at a paged level is a whole
-                    // number of pages, and empty texels already hold EMPTY and depth 0.
+                    // number of pages, and empty texels already hold EMPTY.
                     id.copy_from_slice(&target.id);
-                    depth.copy_from_slice(&target.depth);
                     region.clear();
                     region_group.clear();
                     summarise(&target.id, groups, region, region_group);
@@ -1012,7 +1018,9 @@ impl LightMap {
     }
 
     /// Distance from the light to the stored surface in the direction of the texel's centre
-    /// at level 0 (`f32::INFINITY` when empty or not drawn).
+    /// at level 0 (`f32::INFINITY` when empty or not drawn; NaN where a paged map, which
+    /// stores no depths, holds a triangle: see
+    /// [`Classifier::depth_at`](crate::classify::Classifier::depth_at)).
     #[inline]
     pub fn depth(&self, face: u8, ix: u32, iy: u32) -> f32 {
         self.depth_at(0, face, ix, iy)
@@ -1022,6 +1030,9 @@ impl LightMap {
     #[inline]
     pub fn depth_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> f32 {
         let Ok((f, i)) = self.texel(level, face, ix, iy) else { return f32::INFINITY };
+        if self.paged {
+            return if f.id[i] == EMPTY { f32::INFINITY } else { f32::NAN };
+        }
         let d = f.depth[i];
         // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
         if d.is_nan() || d <= 0.0 {
@@ -1038,19 +1049,15 @@ impl LightMap {
         self.near / d * ((1.0 + sq(iy)) + sq(ix)).sqrt()
     }
 
-    /// The distance stored at face position `(u, v)` (fractions of the face's side, `[0, 1)`)
-    /// by the finest level whose page there was drawn (`f32::INFINITY` if none, or empty): for
-    /// showing a paged map's face whole. For a whole map, [`LightMap::depth`] there.
-    pub fn depth_finest(&self, face: u8, u: f64, v: f64) -> f32 {
-        for level in (0..self.levels()).rev() {
+    /// The texel `(level, x, y)` at face position `(u, v)` (fractions of the face's side,
+    /// `[0, 1)`) of the finest level whose page there was drawn, if any: for showing a paged
+    /// map's face whole. For a whole map, the level-0 texel there.
+    pub fn finest_texel(&self, face: u8, u: f64, v: f64) -> Option<(u8, u32, u32)> {
+        (0..self.levels()).rev().find_map(|level| {
             let res = f64::from(self.resolution_at(level));
             let (x, y) = ((u * res).max(0.0) as u32, (v * res).max(0.0) as u32);
-            // The finest drawn page decides, empty or not.
-            if self.texel(level, face, x, y).is_ok() {
-                return self.depth_at(level, face, x, y);
-            }
-        }
-        f32::INFINITY
+            self.texel(level, face, x, y).is_ok().then_some((level, x, y))
+        })
     }
 
     /// Angle in radians subtended by one texel at `c` (the largest of its two sides): the
@@ -1215,12 +1222,10 @@ impl LightMap {
             }
             let f = &other.faces[usize::from(key.level) * nf + usize::from(key.face)];
             let s = f.slot(key.px, key.py).expect("listed page");
-            let (id, depth) =
-                (&f.id[s * PAGE_TEXELS..][..PAGE_TEXELS], &f.depth[s * PAGE_TEXELS..][..PAGE_TEXELS]);
+            let id = &f.id[s * PAGE_TEXELS..][..PAGE_TEXELS];
             let face = &mut self.faces[usize::from(key.level) * nf + usize::from(key.face)];
             face.insert(key.px, key.py);
             face.id.extend_from_slice(id);
-            face.depth.extend_from_slice(depth);
             face.region.extend_from_slice(&f.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
             if groups {
                 face.region_group.extend_from_slice(&f.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
@@ -1253,7 +1258,6 @@ impl LightMap {
                 let s = face.slot(px, py).expect("listed page");
                 out.insert(px, py);
                 out.id.extend_from_slice(&face.id[s * PAGE_TEXELS..][..PAGE_TEXELS]);
-                out.depth.extend_from_slice(&face.depth[s * PAGE_TEXELS..][..PAGE_TEXELS]);
                 out.region.extend_from_slice(&face.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
                 if groups {
                     out.region_group
@@ -1478,8 +1482,8 @@ fn page_clip(
 /// behind the light (its image is then unbounded).
 type NdcBounds = ((f64, f64), (f64, f64), bool);
 
-/// One page's storage: ids, depths, and region summaries by triangle and by group.
-type PageSlot<'a> = (&'a mut [u32], &'a mut [f32], &'a mut [u32], &'a mut [u32]);
+/// One page's storage: ids, and region summaries by triangle and by group.
+type PageSlot<'a> = (&'a mut [u32], &'a mut [u32], &'a mut [u32]);
 
 /// The marked pages of one level of one face, for [`bin_pages`].
 struct PageGroup {

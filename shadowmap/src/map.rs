@@ -1638,9 +1638,19 @@ fn bin_pages(
                     }
                     let behind = v.iter().any(|c| c.w <= 0.0);
                     let (lo, hi) = image_bounds(&e, ax);
+                    let image = ImageBox::of(lo, hi);
                     for g in &faces[f] {
-                        let (x0, x1, y0, y1) = range(g, lo, hi, behind);
-                        if x0 > x1 || y0 > y1 || (!behind && !holds_centre(g.level, lo, hi)) {
+                        let (x0, x1, y0, y1) = if behind {
+                            (g.x0, g.x1, g.y0, g.y1)
+                        } else {
+                            match image.at(g.level) {
+                                Some((x0, x1, y0, y1)) => {
+                                    (x0.max(g.x0), x1.min(g.x1), y0.max(g.y0), y1.min(g.y1))
+                                }
+                                None => continue,
+                            }
+                        };
+                        if x0 > x1 || y0 > y1 {
                             continue;
                         }
                         let span = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
@@ -1696,34 +1706,62 @@ fn image_bounds(e: &[DVec3], (axis, sign, s, t): (usize, f32, usize, usize)) -> 
     (lo, hi)
 }
 
-/// Whether an image with face NDC bounds `lo..hi` (all in front of the light) may cover a texel
-/// centre at `level`: whether, in both axes, its bounds grown by [`CENTRE_MARGIN`] hold one.
-/// An image that holds none in one axis covers none, and is not drawn (a small triangle far
-/// from the light, at a coarse level, where most of a dense mesh's triangles fall between
-/// texel centres).
-///
-/// Texel `i` of a face of `res` texels spans `u = (s + 1) res / 2` in `[i, i + 1)` (rows: `v =
-/// (1 - t) res / 2`), its centre at `i + 1/2`: the bounds `[a, b]` hold one if `ceil(a - 1/2 -
-/// m) <= floor(b - 1/2 + m)`.
-#[inline]
-fn holds_centre(level: u8, lo: (f64, f64), hi: (f64, f64)) -> bool {
-    let half = f64::from(PAGE << level) * 0.5;
-    // Whether an integer lies in `[a, b]`: `floor(b) >= a`. Clamped to where `i64` holds every
-    // integer exactly (a clamped bound keeps an integer in the interval if there was one, and
-    // faces are far smaller); NaN bounds (a degenerate image) are kept: the rasterizer decides.
-    // Not `f64::floor`, which is a library call without SSE4.1.
-    const BIG: f64 = (1u64 << 52) as f64;
-    let holds = |a: f64, b: f64| {
-        let (a, b) = ((a + 1.0) * half - 0.5 - CENTRE_MARGIN, (b + 1.0) * half - 0.5 + CENTRE_MARGIN);
-        if a.is_nan() || b.is_nan() {
-            return true;
+/// The bounds of a triangle's image on a face (all in front of the light), as fractions of the
+/// face's side: `u` from `s`, `v` from `t` (row 0 at `t = +1`), for [`ImageBox::at`] at every
+/// level of the face's marked pages (a level's texel coordinates are these times its
+/// resolution, a power of two: exact).
+#[derive(Clone, Copy, Debug)]
+struct ImageBox {
+    u: (f64, f64),
+    v: (f64, f64),
+}
+
+impl ImageBox {
+    /// The box of an image with face NDC bounds `lo..hi`.
+    #[inline]
+    fn of(lo: (f64, f64), hi: (f64, f64)) -> Self {
+        Self { u: ((lo.0 + 1.0) * 0.5, (hi.0 + 1.0) * 0.5), v: ((1.0 - hi.1) * 0.5, (1.0 - lo.1) * 0.5) }
+    }
+
+    /// At `level`: the pages `(x0, x1, y0, y1)` the image's bounds, grown by a texel
+    /// (rounding), overlap, clamped to the face; `None` if the bounds hold no texel centre in
+    /// one axis, so that the image covers none.
+    ///
+    /// Texel `i` spans `[i, i + 1)` of `u res`, its centre at `i + 1/2`: bounds `[a, b]`
+    /// (texels) hold one if `floor(b - 1/2 + m) >= a - 1/2 - m`, `m` = [`CENTRE_MARGIN`].
+    #[inline]
+    fn at(&self, level: u8) -> Option<(u32, u32, u32, u32)> {
+        let res = f64::from(PAGE << level);
+        let n = 1u32 << level;
+        let (u0, u1, v0, v1) = (self.u.0 * res, self.u.1 * res, self.v.0 * res, self.v.1 * res);
+        if !(holds_centre(u0, u1) && holds_centre(v0, v1)) {
+            return None;
         }
-        let b = b.clamp(-BIG, BIG);
-        let t = b as i64;
-        let floor = t - i64::from(b < t as f64);
-        floor as f64 >= a
-    };
-    holds(lo.0, hi.0) && holds(-hi.1, -lo.1)
+        // Truncation is the floor of the clamped value (NaN gives 0).
+        let page = |t: f64| ((t * (1.0 / f64::from(PAGE))).max(0.0) as u32).min(n - 1);
+        Some((page(u0 - 1.0), page(u1 + 1.0), page(v0 - 1.0), page(v1 + 1.0)))
+    }
+}
+
+/// Whether texel bounds `[a, b]` (texel units), grown by [`CENTRE_MARGIN`], hold a texel
+/// centre: an image that holds none in one axis covers none, and is not drawn (a small
+/// triangle far from the light, at a coarse level, where most of a dense mesh's triangles fall
+/// between texel centres). NaN bounds (a degenerate image) hold one: the rasterizer decides.
+#[inline]
+fn holds_centre(a: f64, b: f64) -> bool {
+    // Whether an integer lies in `[a', b']`: `floor(b') >= a'`. Clamped to where `i64` holds
+    // every integer exactly (a clamped bound keeps an integer in the interval if there was
+    // one, and faces are far smaller). Not `f64::floor`, which is a library call without
+    // SSE4.1.
+    const BIG: f64 = (1u64 << 52) as f64;
+    let (a, b) = (a - 0.5 - CENTRE_MARGIN, b - 0.5 + CENTRE_MARGIN);
+    if a.is_nan() || b.is_nan() {
+        return true;
+    }
+    let b = b.clamp(-BIG, BIG);
+    let t = b as i64;
+    let floor = t - i64::from(b < t as f64);
+    floor as f64 >= a
 }
 
 /// How far, in texels, [`holds_centre`] grows an image's bounds: they come from the exact offsets
@@ -1866,7 +1904,7 @@ mod tests {
     #[test]
     fn an_image_that_covers_a_texel_centre_is_never_culled() {
         // Small triangles about page corners and edges at every level: wherever drawing the
-        // page (as `build_pages` does) covers a texel, `holds_centre` must say it may.
+        // page (as `build_pages` does) covers a texel, `ImageBox::at` must bin it there.
         let mut rng = hyrt_testkit::Rng(0x5eed);
         let mut rasterizer = Rasterizer::new();
         let mut target = Target::default();
@@ -1908,8 +1946,16 @@ mod tests {
             );
             let hits = target.id.contains(&0);
             let (lo, hi) = image_bounds(&e, ax);
-            let holds = holds_centre(level, lo, hi);
+            let at = ImageBox::of(lo, hi).at(level);
+            let holds = at.is_some();
             assert!(holds || !hits, "triangle {i} at level {level} covers a texel but was culled: {tri:?}");
+            // And the page it covers a texel of is among the pages it is binned to.
+            if let (true, Some((x0, x1, y0, y1))) = (hits, at) {
+                assert!(
+                    (x0..=x1).contains(&px) && (y0..=y1).contains(&py),
+                    "triangle {i}: {at:?} vs page ({px}, {py})"
+                );
+            }
             covered += u32::from(hits);
             culled += u32::from(!holds);
         }

@@ -149,6 +149,15 @@ fn points_whose_pages_were_not_drawn_are_left_to_rays() {
     let lk = cls.classify_at(under, 1, cls.locate_at(under, level));
     assert_eq!((lk.decision, lk.map_border), (Decision::Shadow, false));
     assert!(lk.hint == 2 || lk.hint == 3);
+    // The border rays' cheaper hint names the occluder too, and never the floor's other
+    // triangle (the point's own plane), nor anything where the pages are missing.
+    assert!(matches!(cls.hint_at(1, cls.locate_at(under, level)), 2 | 3));
+    let open = Vec3::new(0.7, 0.0, 0.0);
+    let marked_open = marked(open);
+    let map_open = LightMap::build_pages(&tris, light, &opts(0), &marked_open, &[]);
+    let cls_open = Classifier { map: &map_open, ..cls };
+    assert_eq!(cls_open.hint_at(1, cls_open.locate_at(open, level)), EMPTY);
+    assert_eq!(cls.hint_at(0, cls.locate_at(Vec3::new(3.5, 0.0, 3.5), level)), EMPTY);
     // Far from the drawn pages: undecided, no hint (a ray decides).
     let far = Vec3::new(3.5, 0.0, 3.5);
     let lk = cls.classify_at(far, 0, cls.locate_at(far, level));

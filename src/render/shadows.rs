@@ -1076,6 +1076,13 @@ fn lookup(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit,
     cls.classify_at(s.p, s.tri, cls.locate_at(s.p, level))
 }
 
+/// The occluder a border ray from `s` to light `l` tests first ([`Classifier::hint_at`]), at
+/// the point's level.
+fn hint(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit, r: &Renderer) -> u32 {
+    let level = resolution.get(l).map_or(0, |g| g.level(s.p, s.ng, s.ng.dot(s.wo), r.lights[l].position));
+    cls.hint_at(s.tri, cls.locate_at(s.p, level))
+}
+
 /// The classifier of each of `maps`.
 fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &Renderer) -> Vec<Classifier<'m>> {
     maps.iter().map(|map| classifier(map, planes, r)).collect()
@@ -1133,7 +1140,7 @@ impl Shadowing<'_> {
                     .iter()
                     .map(|&(l, k)| {
                         let (l, s) = (l as usize, &points[k as usize]);
-                        let hint = lookup(&cls[l], &self.resolution, l, s, r).hint;
+                        let hint = hint(&cls[l], &self.resolution, l, s, r);
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);

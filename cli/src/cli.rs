@@ -169,15 +169,15 @@ fn render(a: &RenderArgs) -> Result<()> {
 
     let options = a.knobs.options_for(&scene)?;
     let mut renderer = Renderer::new(&scene, options);
+    // Not the BVH's build time yet: asking for it waits for a background build.
     say(format!(
-        "{}: {} triangles, {} lights, {}x{}, {} threads; BVH {:.1} ms\nplan:\n{}",
+        "{}: {} triangles, {} lights, {}x{}, {} threads\nplan:\n{}",
         scene.name,
         scene.triangle_count(),
         scene.lights.len(),
         scene.settings.width,
         scene.settings.height,
         rayon::current_num_threads(),
-        renderer.bvh_build_ms(),
         renderer.plan.to_string().trim_end()
     ));
 

@@ -165,7 +165,9 @@ fn two_by_two_sweep_writes_consistent_csv_json_png_and_images() {
     for (c, r) in measured.map(|c| &c["measurement"]).zip(&rows) {
         let f = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k}: {c}"));
         assert!((num(r, "first_frame_ms") - f("cold_first_frame_ms")).abs() <= 5e-4, "{r:?}");
-        assert!(f("cold_first_frame_ms") >= f("bvh_build_ms") + f("first_frame_ms"), "{c}");
+        // The BVH is built before the frame, or (raster visibility) beside its first passes.
+        let (cold, bvh, first) = (f("cold_first_frame_ms"), f("bvh_build_ms"), f("first_frame_ms"));
+        assert!(cold >= first && cold >= bvh, "{c}");
         let mb = f("light_map_bytes") / f64::from(1 << 20);
         assert!((num(r, "light_map_mb") - mb).abs() <= 5e-4, "{r:?}");
     }

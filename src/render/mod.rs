@@ -129,7 +129,12 @@ impl<'a> Renderer<'a> {
     /// Builds the BVH and the plan. The scene must have passed `Scene::validate`.
     pub fn new(scene: &'a Scene, options: Options) -> Self {
         let plan = Plan::with_lights(scene, &scene.lights, &options);
-        let tracer = Tracer::build(&scene.positions);
+        // A frame that rasterizes its visibility casts no ray before its shading passes: the
+        // BVH (a serial build) is then built on a thread of its own meanwhile.
+        let tracer = match options.visibility {
+            Visibility::Raster => Tracer::build_in_background(&scene.positions),
+            Visibility::Rays => Tracer::build(&scene.positions),
+        };
         let cam = scene.camera.expect("validated scene has a camera");
         let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
         let raster_near = visibility::near_plane(scene, &camera);
@@ -305,7 +310,7 @@ impl<'a> Renderer<'a> {
     /// allocation, as frames do.
     pub fn visibility(&self) -> (Vec<Option<Hit>>, FrameStats) {
         let mut stats = FrameStats::default();
-        let g = visibility::run(self, &|| {}, &mut stats);
+        let (g, _) = visibility::run(self, &|| {}, &mut stats, false);
         (g, stats)
     }
 
@@ -339,19 +344,16 @@ impl<'a> Renderer<'a> {
         let (w, h) = (self.scene.settings.width, self.scene.settings.height);
         let n = w as usize * h as usize;
 
-        stats.decisions.push(
-            crate::render::FrameDecision::new(
-                "bvh",
-                false,
-                format!(
-                    "reused: built once for the scene ({:.1} ms), which is unchanged",
-                    self.bvh_build_ms()
-                ),
-            )
-            .with_cache(Cache::Reused),
-        );
+        let shades = self.plan.runs(Pass::Direct) || self.plan.runs(Pass::Classify);
+        // With raster visibility and SMeRTS, the few pixels that need a primary ray (at
+        // triangle edges) get it after the map passes, which need no BVH: a background build
+        // of the BVH (`Renderer::new`) then overlaps them. Those pixels' lights are all decided
+        // by rays.
+        let defer = shades
+            && self.options.visibility == Visibility::Raster
+            && self.options.shadows == Shadows::Smerts;
         let t = Instant::now();
-        let gbuffer = visibility::run(self, progress, &mut stats);
+        let (mut gbuffer, deferred) = visibility::run(self, progress, &mut stats, defer);
         stats.record(Pass::Visibility, t);
 
         let mut direct = vec![Vec3::ZERO; n];
@@ -359,7 +361,6 @@ impl<'a> Renderer<'a> {
         let mut points = (self.plan.runs(Pass::Indirect) && self.options.indirect == Indirect::Maps)
             .then(|| vec![gather::ShadePoint::default(); n]);
         let mut shadowing = None;
-        let shades = self.plan.runs(Pass::Direct) || self.plan.runs(Pass::Classify);
         if !shades {
             points = None;
         }
@@ -368,6 +369,10 @@ impl<'a> Renderer<'a> {
                 let mut s =
                     self.shadowing(&gbuffer, &mut direct, points.as_deref_mut(), progress, &mut stats);
                 let t = Instant::now();
+                if !deferred.is_empty() {
+                    stats.rays += visibility::resolve_deferred(self, &mut gbuffer, &deferred);
+                    s.add_ray_pixels(self, &gbuffer, &deferred, points.as_deref_mut());
+                }
                 stats.rays += s.trace(self, &gbuffer, &mut direct, self.options.check_visibility);
                 stats.record(Pass::ShadowRays, t);
                 stats.lights = s.lights.clone();
@@ -399,6 +404,19 @@ impl<'a> Renderer<'a> {
 
         let mut film = Film::new(w, h);
         film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + indirect[i] + spec[i]);
+        // Last: a background build may have finished only during the frame.
+        stats.decisions.insert(
+            0,
+            crate::render::FrameDecision::new(
+                "bvh",
+                false,
+                format!(
+                    "reused: built once for the scene ({:.1} ms), which is unchanged",
+                    self.bvh_build_ms()
+                ),
+            )
+            .with_cache(Cache::Reused),
+        );
         stats.time_ms.insert("total", ms(start));
         let shadows = shadowing.map(|s| s.bufs).and_then(|b| {
             if self.options.keep_buffers {

@@ -17,8 +17,8 @@
 //! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points
 //! in L1 while every light decides them; the alternative, a screen-sized buffer per light and a
 //! pass per buffer, spent its time writing and reading those buffers. The occluder hint is not
-//! stored: only border pairs need it, and looking it up again costs less than a `u32` per pixel
-//! and light.
+//! stored: only border pairs need it, and reading it again from the map's texels
+//! ([`Classifier::hint_at`]) costs less than a `u32` per pixel and light.
 //!
 //! With `Shadows::Maps` the map's decision is final (no borders, no rays): the pure shadow-map
 //! baseline. Mirror hits have no screen neighbours: they use the map-space test alone
@@ -294,7 +294,8 @@ pub struct ShadowBuffers {
     /// With `check_visibility`: the decisions a plain shadow ray contradicts, whoever made
     /// them: the map, or a border ray answered by its hint or by a traversal (else empty).
     pub wrong: Vec<Vec<bool>>,
-    /// The border before dilation (pixels with a decision only), and what each undecided
+    /// The border before dilation (pixels with a decision only; with the pixels whose camera
+    /// hit came after the map passes, all of whose lights rays decide), and what each undecided
     /// pixel's shadow ray did: [`RAY_NONE`], [`RAY_HINT`] (its occluder hint blocked it: no
     /// traversal) or [`RAY_TRAVERSAL`].
     pub border: Vec<Vec<bool>>,
@@ -331,6 +332,45 @@ pub struct Shadowing<'r> {
     /// Per light, the map's lit and shadowed decisions (before the border rays), and how many
     /// of them were made per tile.
     map_counts: Vec<[u64; 3]>,
+    /// Per light, the pairs of [`Shadowing::add_ray_pixels`] (rays alone decide them).
+    added: Vec<u64>,
+}
+
+impl Shadowing<'_> {
+    /// Adds `pixels` (whose camera hits came after the map passes: `visibility::run`'s
+    /// deferred primary rays) with every light that faces their hit decided by a shadow ray,
+    /// and their diffuse shading points to `points`.
+    pub(crate) fn add_ray_pixels(
+        &mut self,
+        r: &Renderer,
+        gbuffer: &[Option<Hit>],
+        pixels: &[u32],
+        mut points: Option<&mut [ShadePoint]>,
+    ) {
+        let b = &mut self.bufs;
+        let stride = b.faces.stride;
+        for &i in pixels {
+            let i = i as usize;
+            let Some(s) = r.shading_point(gbuffer, i) else { continue };
+            if let Some(pts) = points.as_deref_mut()
+                && r.diffuse(s.tri)
+            {
+                pts[i] = ShadePoint::of(&s);
+            }
+            let tri = &r.scene.positions[s.tri as usize];
+            for (l, light) in r.lights.iter().enumerate() {
+                if facing(&s, light, tri).is_some() {
+                    let (byte, m) = (i * stride + l / 8, 1u8 << (l % 8));
+                    b.faces.bits[byte] |= m;
+                    b.und.bits[byte] |= m;
+                    self.added[l] += 1;
+                    if let Some(border) = b.border.get_mut(l) {
+                        border[i] = true;
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Side of the square pixel tiles of the classify pass: its shading points stay in L1 while
@@ -706,18 +746,25 @@ impl Renderer<'_> {
         // The lights' pages drawn concurrently: each build has serial steps (binning's sort,
         // the page tables) that another light's drawing fills.
         let groups = if jobs.is_empty() { &[][..] } else { self.plane_groups().0 };
+        // As many at a time as there are threads: each holds its bins until drawn, and more in
+        // flight add to the peak memory, not to the speed.
         let drawn: Vec<(LightMap, f64)> = jobs
-            .par_iter()
-            .map(|job| {
-                let t = Instant::now();
-                let map = LightMap::build_pages(
-                    &self.scene.positions,
-                    lights[job.light].position,
-                    &self.options.shadow.map,
-                    &job.draw,
-                    groups,
-                );
-                (map, super::ms(t))
+            .chunks(rayon::current_num_threads().max(1))
+            .flat_map(|chunk| {
+                chunk
+                    .par_iter()
+                    .map(|job| {
+                        let t = Instant::now();
+                        let map = LightMap::build_pages(
+                            &self.scene.positions,
+                            lights[job.light].position,
+                            &self.options.shadow.map,
+                            &job.draw,
+                            groups,
+                        );
+                        (map, super::ms(t))
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         for (job, (map, ms)) in jobs.into_iter().zip(drawn) {
@@ -922,7 +969,8 @@ impl Renderer<'_> {
                 ..LightStats::default()
             })
             .collect();
-        Shadowing { maps, bufs, lights, planes, map_counts, resolution }
+        let added = vec![0; nl];
+        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added }
     }
 
     /// The borders pass: the (pixel, light) pairs that a shadow ray decides, `bufs.und`, from
@@ -1187,10 +1235,14 @@ impl Shadowing<'_> {
         for (&i, c) in pixels.iter().zip(colors) {
             direct[i as usize] = c;
         }
-        for ((st, m), u) in self.lights.iter_mut().zip(&self.map_counts).zip(&und_counts) {
+        for (((st, m), u), a) in
+            self.lights.iter_mut().zip(&self.map_counts).zip(&und_counts).zip(&self.added)
+        {
+            // Undecided pairs: the map's border pairs (lit or shadowed by it), and those no map
+            // decided (`add_ray_pixels`).
             st.undecided = u[0];
             st.lit = m[0] - u[1];
-            st.shadowed = m[1] - (u[0] - u[1]);
+            st.shadowed = m[1] - (u[0] - u[1] - a);
             st.by_tile = m[2];
         }
         if check {

@@ -14,6 +14,8 @@ use glam::{Vec3, Vec4};
 use hyrt_raster::{Affine, EMPTY_ID, RasterOptions, Rasterizer, Target, TriangleSource};
 use hyrt_tracer::{Hit, RayCounts, RayKind, RowRays};
 
+use rayon::prelude::*;
+
 use super::{FrameStats, Progress, Renderer, Visibility, cull::CLUSTER, par_rows};
 use crate::camera::CameraRays;
 
@@ -22,7 +24,17 @@ use crate::camera::CameraRays;
 /// (normals, error bounds) are built from it by the shading passes.
 ///
 /// Both strategies write every pixel, so the G-buffer of the previous frame is reused as it is.
-pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Option<Hit>> {
+///
+/// With `defer` (raster visibility only), the pixels that need a primary ray get none here:
+/// they are left `None` and listed (in pixel order), for [`resolve_deferred`] to cast once the
+/// shading passes that need no ray are done (the BVH may still be building meanwhile).
+pub fn run(
+    r: &Renderer,
+    progress: Progress,
+    stats: &mut FrameStats,
+    defer: bool,
+) -> (Vec<Option<Hit>>, Vec<u32>) {
+    let deferred = std::sync::Mutex::new(Vec::new());
     let (w, h) = (r.scene.settings.width, r.scene.settings.height);
     let mut gbuffer = r.take_gbuffer(w as usize * h as usize);
     match r.options.visibility {
@@ -63,6 +75,11 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
                 for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
                     let outside = px.is_some_and(|h| h.bary.iter().any(|&b| b < 0.0));
                     if outside || (parallel && px.is_none() && id != EMPTY_ID) {
+                        if defer {
+                            *px = None;
+                            deferred.lock().unwrap_or_else(|e| e.into_inner()).push(y * w + x as u32);
+                            continue;
+                        }
                         let before = *c;
                         *px = primary_ray(r, x as u32, y, c);
                         r.pixel_rays.add(y as usize * w as usize + x, &before, c);
@@ -72,7 +89,29 @@ pub fn run(r: &Renderer, progress: Progress, stats: &mut FrameStats) -> Vec<Opti
             stats.record(super::Pass::VisResolve, t);
         }
     }
-    gbuffer
+    let mut deferred = deferred.into_inner().unwrap_or_else(|e| e.into_inner());
+    deferred.sort_unstable();
+    (gbuffer, deferred)
+}
+
+/// Casts the primary rays [`run`] deferred (pixels `deferred`) into `gbuffer`.
+pub fn resolve_deferred(r: &Renderer, gbuffer: &mut [Option<Hit>], deferred: &[u32]) -> RayCounts {
+    let w = r.scene.settings.width.max(1);
+    let hits: Vec<(Option<Hit>, RayCounts)> = deferred
+        .par_iter()
+        .map(|&i| {
+            let mut c = RayCounts::default();
+            let hit = primary_ray(r, i % w, i / w, &mut c);
+            r.pixel_rays.add(i as usize, &RayCounts::default(), &c);
+            (hit, c)
+        })
+        .collect();
+    let mut total = RayCounts::default();
+    for (&i, (hit, c)) in deferred.iter().zip(hits) {
+        gbuffer[i as usize] = hit;
+        total += c;
+    }
+    total
 }
 
 /// The rasterizer's options for the visibility pass: reversed-Z ([`ClipTransform`]), and the

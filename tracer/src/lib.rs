@@ -35,6 +35,8 @@ pub mod offset;
 pub mod orient;
 pub mod triangle;
 
+use std::sync::{Mutex, OnceLock};
+use std::thread::JoinHandle;
 use std::time::Duration;
 
 use glam::{Vec3, Vec3A};
@@ -128,11 +130,11 @@ pub struct Hit {
 
 /// A BVH over triangles, built once per scene.
 pub struct Tracer {
-    bvh: CwBvh,
-    /// Triangles in BVH leaf order, in the tracer's scaled frame.
-    tris: Vec<[Vec3A; 3]>,
-    /// Original id of each triangle in `tris`.
-    ids: Vec<u32>,
+    /// The BVH, once built ([`Tracer::build`], or [`Tracer::build_in_background`] when a
+    /// query first needs it).
+    built: OnceLock<Bvh>,
+    /// [`Tracer::build_in_background`]'s build, until a query takes its result.
+    pending: Mutex<Option<JoinHandle<Bvh>>>,
     /// Every triangle given to [`Tracer::build`], by original id, in the scaled frame (`p * scale`,
     /// non-finite ones included): single-triangle tests by id ([`Tracer::hits_triangle`], the
     /// plane hits of [`batch`]) read their vertices from here instead of scaling them per call.
@@ -140,7 +142,80 @@ pub struct Tracer {
     by_id: Vec<[Vec3; 3]>,
     /// Power of two applied to all coordinates (see [`Tracer::build`]).
     scale: f32,
+}
+
+/// The scale of [`Tracer::build`] for `tris`, and the triangles times it, by id.
+fn scaled(tris: &[[Vec3; 3]]) -> (f32, Vec<[Vec3; 3]>) {
+    let max_abs =
+        tris.iter().flatten().filter(|p| p.is_finite()).fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+    let scale = if max_abs > 0.0 {
+        let e = max_abs.log2().floor() as i32;
+        2f32.powi((19 - e).clamp(-120, 120))
+    } else {
+        1.0
+    };
+    (scale, tris.iter().map(|t| t.map(|p| p * scale)).collect())
+}
+
+/// The BVH of a [`Tracer`] and its triangles.
+struct Bvh {
+    bvh: CwBvh,
+    /// Triangles in BVH leaf order, in the tracer's scaled frame.
+    tris: Vec<[Vec3A; 3]>,
+    /// Original id of each triangle in `tris`.
+    ids: Vec<u32>,
     build_time: Duration,
+}
+
+impl Bvh {
+    /// The BVH of `tris` times `scale`, less the triangles [`Tracer::build`] leaves out.
+    fn build(tris: &[[Vec3; 3]], scale: f32) -> Self {
+        let start = std::time::Instant::now();
+        let (kept, kept_ids) = Self::kept(tris, scale);
+        Self::of_kept(kept, kept_ids, start)
+    }
+
+    /// The triangles [`Tracer::build`] keeps, times `scale` and padded, with their ids, in
+    /// input order. The filter's set is gone before the build (which, beside a frame's first
+    /// passes, should add to their peak memory as little as it can).
+    fn kept(tris: &[[Vec3; 3]], scale: f32) -> (Vec<Padded>, Vec<u32>) {
+        {
+            let mut kept = Vec::with_capacity(tris.len());
+            let mut kept_ids = Vec::with_capacity(tris.len());
+            let mut seen = std::collections::HashSet::with_capacity(tris.len());
+            let bits = |t: &[Vec3; 3]| t.map(|p| p.to_array().map(f32::to_bits));
+            for (i, t) in tris.iter().enumerate() {
+                let point = t[0] == t[1] && t[1] == t[2];
+                if t.iter().all(|p| p.is_finite()) && !point && seen.insert(bits(t)) {
+                    kept.push(Padded(Triangle {
+                        v0: Vec3A::from(t[0] * scale),
+                        v1: Vec3A::from(t[1] * scale),
+                        v2: Vec3A::from(t[2] * scale),
+                    }));
+                    kept_ids.push(i as u32);
+                }
+            }
+            (kept, kept_ids)
+        }
+    }
+
+    /// The BVH of `kept` ([`Bvh::kept`]), its build started at `start`.
+    fn of_kept(kept: Vec<Padded>, kept_ids: Vec<u32>, start: std::time::Instant) -> Self {
+        let bvh = if kept.is_empty() {
+            CwBvh::default()
+        } else {
+            build_cwbvh(&kept, BvhBuildParams::medium_build(), &mut Duration::default())
+        };
+        let (tris, ids) = bvh
+            .primitive_indices
+            .iter()
+            .map(|&k| {
+                let t = &kept[k as usize].0;
+                ([t.v0, t.v1, t.v2], kept_ids[k as usize])
+            })
+            .unzip();
+        Self { bvh, tris, ids, build_time: start.elapsed() }
+    }
 }
 
 impl Tracer {
@@ -167,51 +242,47 @@ impl Tracer {
     /// coordinate is at least `2^19 * 2^-23 = 1/16`, so the culling distance `1e-4` is far
     /// below anything that floating-point coordinates can distinguish.
     pub fn build(tris: &[[Vec3; 3]]) -> Self {
-        let start = std::time::Instant::now();
-        let max_abs =
-            tris.iter().flatten().filter(|p| p.is_finite()).fold(0.0f32, |m, p| m.max(p.abs().max_element()));
-        let scale = if max_abs > 0.0 {
-            let e = max_abs.log2().floor() as i32;
-            2f32.powi((19 - e).clamp(-120, 120))
-        } else {
-            1.0
-        };
-        let mut kept = Vec::with_capacity(tris.len());
-        let mut kept_ids = Vec::with_capacity(tris.len());
-        let mut seen = std::collections::HashSet::with_capacity(tris.len());
-        let bits = |t: &[Vec3; 3]| t.map(|p| p.to_array().map(f32::to_bits));
-        for (i, t) in tris.iter().enumerate() {
-            let point = t[0] == t[1] && t[1] == t[2];
-            if t.iter().all(|p| p.is_finite()) && !point && seen.insert(bits(t)) {
-                kept.push(Triangle {
-                    v0: Vec3A::from(t[0] * scale),
-                    v1: Vec3A::from(t[1] * scale),
-                    v2: Vec3A::from(t[2] * scale),
-                });
-                kept_ids.push(i as u32);
-            }
-        }
-        let bvh = if kept.is_empty() {
-            CwBvh::default()
-        } else {
-            let padded: Vec<Padded> = kept.iter().map(|t| Padded(*t)).collect();
-            build_cwbvh(&padded, BvhBuildParams::medium_build(), &mut Duration::default())
-        };
-        let (bvh_tris, ids) = bvh
-            .primitive_indices
-            .iter()
-            .map(|&k| {
-                let t = &kept[k as usize];
-                ([t.v0, t.v1, t.v2], kept_ids[k as usize])
-            })
-            .unzip();
-        let by_id = tris.iter().map(|t| t.map(|p| p * scale)).collect();
-        Self { bvh, tris: bvh_tris, ids, by_id, scale, build_time: start.elapsed() }
+        let (scale, by_id) = scaled(tris);
+        let built = OnceLock::from(Bvh::build(tris, scale));
+        Self { built, pending: Mutex::new(None), by_id, scale }
     }
 
-    /// Wall time of [`Tracer::build`].
+    /// [`Tracer::build`], with the BVH built on a thread of its own while the caller goes on:
+    /// the single-triangle tests ([`Tracer::hits_triangle`], [`Tracer::hit_on_plane`], the row
+    /// hits of [`batch`]) answer at once, and the first query that traverses the BVH waits for
+    /// it. The same BVH, so the same answers. Why: the build is serial, and a renderer that
+    /// rasterizes its visibility and draws light maps before it casts a ray (a hybrid frame)
+    /// has that time for it on the other cores.
+    pub fn build_in_background(tris: &[[Vec3; 3]]) -> Self {
+        let (scale, by_id) = scaled(tris);
+        let owned = tris.to_vec();
+        let handle = std::thread::Builder::new()
+            .name("hyrt-bvh".into())
+            .spawn(move || {
+                let start = std::time::Instant::now();
+                let (kept, ids) = Bvh::kept(&owned, scale);
+                drop(owned);
+                Bvh::of_kept(kept, ids, start)
+            })
+            .expect("spawning the BVH build thread");
+        Self { built: OnceLock::new(), pending: Mutex::new(Some(handle)), by_id, scale }
+    }
+
+    /// The BVH, waiting for a background build to finish.
+    #[inline]
+    fn bvh(&self) -> &Bvh {
+        self.built.get_or_init(|| {
+            let handle = self.pending.lock().unwrap_or_else(|e| e.into_inner()).take();
+            match handle.expect("a tracer is built at once or in the background").join() {
+                Ok(bvh) => bvh,
+                Err(panic) => std::panic::resume_unwind(panic),
+            }
+        })
+    }
+
+    /// Wall time of the BVH's build (waiting for a background build to finish).
     pub fn build_time(&self) -> Duration {
-        self.build_time
+        self.bvh().build_time
     }
 
     /// Number of triangles given to [`Tracer::build`].
@@ -221,7 +292,7 @@ impl Tracer {
 
     /// Number of those in the BVH (see [`Tracer::build`] for the ones left out).
     pub fn bvh_triangle_count(&self) -> usize {
-        self.tris.len()
+        self.bvh().tris.len()
     }
 
     /// The internal power-of-two scale (exposed for tests).
@@ -240,20 +311,21 @@ impl Tracer {
     /// a face the ray enters, then to the smaller triangle id.
     pub fn closest_hit(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> Option<Hit> {
         counts.add(kind, 1);
-        if self.bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+        let Bvh { bvh, tris, ids, .. } = self.bvh();
+        if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
             return None;
         }
         let (ob, pre) = self.scaled(ray);
         let origin = ray.origin * self.scale;
         // The tie key of BVH slot `i`: faces the ray leaves after those it enters, then the id.
         let key = |i: usize| {
-            let enters = plane_side(&self.tris[i].map(Vec3::from), origin) == PlaneSide::Front;
-            (!enters, self.ids[i])
+            let enters = plane_side(&tris[i].map(Vec3::from), origin) == PlaneSide::Front;
+            (!enters, ids[i])
         };
         // (t, BVH slot, barycentrics) of the best hit so far.
         let mut best: Option<(f32, usize, [f32; 3])> = None;
-        self.bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
-            let Some(h) = intersect_triangle(&pre, &self.tris[i], r.tmax) else {
+        bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
+            let Some(h) = intersect_triangle(&pre, &tris[i], r.tmax) else {
                 return f32::INFINITY;
             };
             let better = match best {
@@ -274,18 +346,19 @@ impl Tracer {
             // a tied triangle that would win the tie alive.
             best.map_or(f32::INFINITY, |(bt, _, _)| (bt * (1.0 + DEPTH_TIE)).next_up())
         });
-        best.map(|(t, i, bary)| Hit { t: t / self.scale, tri: self.ids[i], bary })
+        best.map(|(t, i, bary)| Hit { t: t / self.scale, tri: ids[i], bary })
     }
 
     /// True when anything is hit with `0 < t < ray.tmax`.
     pub fn occluded(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> bool {
         counts.add(kind, 1);
-        if self.bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+        let Bvh { bvh, tris, .. } = self.bvh();
+        if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
             return false;
         }
         let (ob, pre) = self.scaled(ray);
-        !self.bvh.ray_traverse_miss(ob, |r, i| {
-            intersect_triangle(&pre, &self.tris[i], r.tmax).map_or(f32::INFINITY, |h| h.t)
+        !bvh.ray_traverse_miss(ob, |r, i| {
+            intersect_triangle(&pre, &tris[i], r.tmax).map_or(f32::INFINITY, |h| h.t)
         })
     }
 

@@ -372,3 +372,34 @@ fn traversal_agrees_with_brute_force_on_boxes_far_away() {
         assert_eq!(disagree, 0, "offset {offset}: {disagree} disagreements in {total} rays");
     }
 }
+
+/// A BVH built on a thread of its own answers every query as one built at once: the same hits,
+/// occlusions and counts, and the single-triangle tests work before the build is done.
+#[test]
+fn a_background_build_answers_as_a_build_at_once() {
+    let mut tris = grid(12);
+    // Repeats and a degenerate triangle, which both builds leave out alike.
+    tris.push(tris[3]);
+    tris.push([Vec3::ONE; 3]);
+    let now = Tracer::build(&tris);
+    let later = Tracer::build_in_background(&tris);
+    let probe = Ray::new(vec3(0.5, 0.25, 1.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
+    assert_eq!(later.hits_triangle(0, &probe), now.hits_triangle(0, &probe));
+    let (mut a, mut b) = (RayCounts::default(), RayCounts::default());
+    for k in 0..400 {
+        let (x, y) = ((k % 20) as f32 * 0.61, (k / 20) as f32 * 0.59);
+        let dir = vec3(0.2 - 0.01 * (k % 7) as f32, 0.1, -1.0).normalize();
+        let ray = Ray::new(vec3(x, y, 3.0), dir, if k % 3 == 0 { 2.5 } else { f32::INFINITY });
+        assert_eq!(
+            later.closest_hit(&ray, RayKind::Primary, &mut a),
+            now.closest_hit(&ray, RayKind::Primary, &mut b)
+        );
+        assert_eq!(
+            later.occluded(&ray, RayKind::Shadow, &mut a),
+            now.occluded(&ray, RayKind::Shadow, &mut b)
+        );
+    }
+    assert_eq!(a, b);
+    assert_eq!(later.bvh_triangle_count(), now.bvh_triangle_count());
+    assert_eq!(later.bvh_triangle_count(), tris.len() - 2);
+}

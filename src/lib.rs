@@ -11,5 +11,6 @@ pub mod metrics;
 pub mod options;
 pub mod output;
 pub mod plan;
+pub mod process;
 pub mod render;
 pub mod scene;

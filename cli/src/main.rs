@@ -17,6 +17,7 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
+    hyrt::process::limit_malloc_arenas();
     let cli = cli::Cli::parse();
     // An interrupted render must not leave its half-written temporaries behind.
     if let Err(e) = hyrt::output::remove_temporaries_on_signal() {

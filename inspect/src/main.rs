@@ -27,6 +27,7 @@ struct Args {
 }
 
 fn main() -> eframe::Result {
+    hyrt::process::limit_malloc_arenas();
     let a = Args::parse();
     let setup = Setup { scene: a.scene, size: a.size, max_depth: a.max_depth, knobs: a.knobs, options: None };
     let options = eframe::NativeOptions {

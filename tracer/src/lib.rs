@@ -256,16 +256,22 @@ impl Tracer {
     pub fn build_in_background(tris: &[[Vec3; 3]]) -> Self {
         let (scale, by_id) = scaled(tris);
         let owned = tris.to_vec();
-        let handle = std::thread::Builder::new()
-            .name("hyrt-bvh".into())
-            .spawn(move || {
-                let start = std::time::Instant::now();
-                let (kept, ids) = Bvh::kept(&owned, scale);
-                drop(owned);
-                Bvh::of_kept(kept, ids, start)
-            })
-            .expect("spawning the BVH build thread");
-        Self { built: OnceLock::new(), pending: Mutex::new(Some(handle)), by_id, scale }
+        let spawned = std::thread::Builder::new().name("hyrt-bvh".into()).spawn(move || {
+            let start = std::time::Instant::now();
+            let (kept, ids) = Bvh::kept(&owned, scale);
+            drop(owned);
+            Bvh::of_kept(kept, ids, start)
+        });
+        match spawned {
+            Ok(handle) => Self { built: OnceLock::new(), pending: Mutex::new(Some(handle)), by_id, scale },
+            // No thread to be had: built here, at once.
+            Err(_) => Self {
+                built: OnceLock::from(Bvh::build(tris, scale)),
+                pending: Mutex::new(None),
+                by_id,
+                scale,
+            },
+        }
     }
 
     /// The BVH, waiting for a background build to finish.

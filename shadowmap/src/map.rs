@@ -94,9 +94,14 @@ pub const EMPTY: u32 = hyrt_raster::EMPTY_ID;
 /// The near distance as a fraction of the distance to the farthest vertex (module docs).
 pub const NEAR_FRACTION: f32 = 1.0 / (1u32 << 20) as f32;
 
-/// Relative depth window within which two surfaces are a tie, won by the smaller id: the
-/// tracer's `2^-16`, so that coplanar duplicates resolve to the same triangle as in ray casting.
-pub const DEPTH_TIE: f32 = 1.0 / 65536.0;
+/// Relative depth window within which two surfaces are a tie in a map, won by the smaller id:
+/// `2^-22`, a few ulps of the `f32` depths (each its plane's, exact to half an ulp), enough for
+/// coplanar triangles to tie. Not the tracer's `2^-16`, which must absorb the ray-triangle
+/// test's error: at a light `r` away a `2^-16 r` window would tie an occluder with the surface
+/// it stands on over its whole base (a post on the ground, under a light a thousand scene sizes
+/// away, lost its contact shadow to the ground's smaller id). Which of two coplanar triangles a
+/// texel records does not change a decision: both have the same plane.
+pub const DEPTH_TIE: f32 = 1.0 / (1u32 << 22) as f32;
 
 /// Largest number of subdivisions of a triangle edge in paraboloid maps (`n x n` sub-triangles;
 /// see the tessellation bound in `tess.rs`).

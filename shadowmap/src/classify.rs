@@ -494,11 +494,7 @@ impl Classifier<'_> {
     /// first texel that decides shadow): texel loads and compares, no plane intersection.
     #[inline]
     pub fn hint_at(&self, own: u32, c: MapCoord) -> u32 {
-        let map = self.map;
-        let last = map.resolution_at(c.level).saturating_sub(1);
-        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-        let Footprint { texels: foot, inside, .. } = Footprint::of(map, c);
-        let ids = map.ids_at(c.level, c.face, [(ix, iy), foot[0], foot[1], foot[2], foot[3]]);
+        let (_, Footprint { inside, .. }, ids) = self.texel_ids(c);
         let own_plane = self.planes.get(own as usize).copied().unwrap_or(Plane::ZERO);
         let other = |id: u32| {
             id != own
@@ -509,18 +505,27 @@ impl Classifier<'_> {
         ids[..if inside { 5 } else { 1 }].iter().copied().find(|&id| other(id)).unwrap_or(EMPTY)
     }
 
+    /// The texel under `c` (clamped to the face), its 2x2 footprint, and the ids of the texel
+    /// and of the footprint's four, each page looked up once.
+    #[inline]
+    fn texel_ids(&self, c: MapCoord) -> ((u32, u32), Footprint, [u32; 5]) {
+        let map = self.map;
+        let last = map.resolution_at(c.level).saturating_sub(1);
+        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
+        let fp = Footprint::of(map, c);
+        let foot = fp.texels;
+        let ids = map.ids_at(c.level, c.face, [(ix, iy), foot[0], foot[1], foot[2], foot[3]]);
+        ((ix, iy), fp, ids)
+    }
+
     /// [`Classifier::classify`] with `p`'s location `c` from [`Classifier::locate`].
     #[inline]
     pub fn classify_at(&self, p: Vec3, own: u32, c: MapCoord) -> Lookup {
         let map = self.map;
         let light = map.light();
         let v = p - light;
-        let last = map.resolution_at(c.level).saturating_sub(1);
-        let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-        let Footprint { texels: foot, inside, in_domain, .. } = Footprint::of(map, c);
-        // The centre and the footprint, each page looked up once.
-        let [centre, f0, f1, f2, f3] =
-            map.ids_at(c.level, c.face, [(ix, iy), foot[0], foot[1], foot[2], foot[3]]);
+        let ((ix, iy), Footprint { texels: foot, inside, in_domain, .. }, ids) = self.texel_ids(c);
+        let [centre, f0, f1, f2, f3] = ids;
         let foot_ids = if inside { [f0, f1, f2, f3] } else { [centre; 4] };
         let texel = [ix, iy];
 

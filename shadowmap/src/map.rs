@@ -203,10 +203,10 @@ impl Layout {
 /// Side of a page: a face's texels are stored, and paged maps drawn, in squares of this many
 /// texels per side.
 ///
-/// Why 32: a page is then 4 KB of ids (and, in a whole map, 4 KB of depths). A frame's receivers touch the pages
-/// around them, and the smaller the page, the fewer texels it holds that no receiver reads
-/// (memory the budget would rather spend on finer levels); smaller pages cost more per-page
-/// work (binning, setting up the triangles that straddle pages).
+/// Why 32: a page is then 4 KB of ids (and, in a whole map, 4 KB of depths). A frame's
+/// receivers touch the pages around them, and the smaller the page, the fewer texels it holds
+/// that no receiver reads (memory the budget would rather spend on finer levels); smaller pages
+/// cost more per-page work (binning, setting up the triangles that straddle pages).
 pub const PAGE: u32 = 32;
 
 /// Texels of one page.
@@ -272,9 +272,10 @@ impl PageKey {
 const DENSE_PAGES: usize = 1 << 12;
 
 /// The most memory ([`LightMap::memory_bytes`]) that a paged cube map of `pages` pages can
-/// take, wherever they lie: per page its ids (a paged map stores no depths), both region summaries and its page-table
-/// entry, plus the dense page tables of the coarse levels (allocated whole once a level of a
-/// face holds a page). For sizing maps under a memory budget.
+/// take, wherever they lie: per page its ids (a paged map stores no depths), both region
+/// summaries and its page-table entry, plus the dense page tables of the coarse levels
+/// (allocated whole once a level of a face holds a page). For sizing maps under a memory
+/// budget.
 pub fn paged_memory_bound(pages: usize) -> usize {
     let per_page = PAGE_TEXELS * 4 + PAGE_REGIONS * 8 + 8;
     let dense_levels = (0..=MAX_LEVEL).filter(|&k| (1usize << (2 * k)) <= DENSE_PAGES).count();
@@ -298,12 +299,11 @@ struct Face {
     sparse: rustc_hash::FxHashMap<u32, u32>,
     /// Per slot, [`PAGE_TEXELS`] ids, row-major.
     id: Vec<u32>,
-    /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major;
-    /// empty in a paged map, whose texels' distances come from their triangles' planes
-    /// ([`Classifier::depth_at`](crate::classify::Classifier::depth_at)): the classifier reads
-    /// stored depths only for planes seen edge-on, where a ray decides instead. Distances are
-    /// made from them only when asked for ([`LightMap::depth_at`]), which the
-    /// classifier does only for planes seen edge-on.
+    /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major:
+    /// distances are made from them only when asked for ([`LightMap::depth_at`]), which the
+    /// classifier does only for planes seen edge-on. Empty in a paged map (a ray decides those
+    /// planes; its texels' distances come from their triangles' planes,
+    /// [`Classifier::depth_at`](crate::classify::Classifier::depth_at)).
     depth: Vec<f32>,
     /// Per slot, [`PAGE_REGIONS`] [`REGION`]-square blocks, row-major: the one triangle its
     /// texels see ([`EMPTY`] if none), or [`MIXED`] (see [`LightMap::region_id`]).

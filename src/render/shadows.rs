@@ -436,9 +436,8 @@ impl Renderer<'_> {
         // One pass over the hits marks every light with and without the refinement for grazing
         // light (a light over the budget with it mostly fits without); then, for the lights that
         // still do not fit, several caps at once, until one fits.
-        let all: Vec<usize> = (0..nl).collect();
         let mut variants: Vec<Vec<Resolution>> = vec![vec![guide, unrefined]; nl];
-        let mut todo = all;
+        let mut todo: Vec<usize> = (0..nl).collect();
         while !todo.is_empty() {
             let marked = self.mark_pages(gbuffer, &todo, &variants);
             let mut next = Vec::new();
@@ -1120,15 +1119,19 @@ fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &Renderer) -> Class
 /// Light `l`'s decision at `s` by its classifier `cls`, at the level `resolution` gives the
 /// point (paged maps; level 0 when `resolution` is empty).
 fn lookup(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit, r: &Renderer) -> Lookup {
-    let level = resolution.get(l).map_or(0, |g| g.level(s.p, s.ng, s.ng.dot(s.wo), r.lights[l].position));
-    cls.classify_at(s.p, s.tri, cls.locate_at(s.p, level))
+    cls.classify_at(s.p, s.tri, locate(cls, resolution, l, s, r))
 }
 
 /// The occluder a border ray from `s` to light `l` tests first ([`Classifier::hint_at`]), at
 /// the point's level.
 fn hint(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit, r: &Renderer) -> u32 {
+    cls.hint_at(s.tri, locate(cls, resolution, l, s, r))
+}
+
+/// Where `s` falls in light `l`'s map, at its level (paged maps; 0 otherwise).
+fn locate(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit, r: &Renderer) -> MapCoord {
     let level = resolution.get(l).map_or(0, |g| g.level(s.p, s.ng, s.ng.dot(s.wo), r.lights[l].position));
-    cls.hint_at(s.tri, cls.locate_at(s.p, level))
+    cls.locate_at(s.p, level)
 }
 
 /// The classifier of each of `maps`.

@@ -179,24 +179,22 @@ impl Bvh {
     /// input order. The filter's set is gone before the build (which, beside a frame's first
     /// passes, should add to their peak memory as little as it can).
     fn kept(tris: &[[Vec3; 3]], scale: f32) -> (Vec<Padded>, Vec<u32>) {
-        {
-            let mut kept = Vec::with_capacity(tris.len());
-            let mut kept_ids = Vec::with_capacity(tris.len());
-            let mut seen = std::collections::HashSet::with_capacity(tris.len());
-            let bits = |t: &[Vec3; 3]| t.map(|p| p.to_array().map(f32::to_bits));
-            for (i, t) in tris.iter().enumerate() {
-                let point = t[0] == t[1] && t[1] == t[2];
-                if t.iter().all(|p| p.is_finite()) && !point && seen.insert(bits(t)) {
-                    kept.push(Padded(Triangle {
-                        v0: Vec3A::from(t[0] * scale),
-                        v1: Vec3A::from(t[1] * scale),
-                        v2: Vec3A::from(t[2] * scale),
-                    }));
-                    kept_ids.push(i as u32);
-                }
+        let mut kept = Vec::with_capacity(tris.len());
+        let mut kept_ids = Vec::with_capacity(tris.len());
+        let mut seen = std::collections::HashSet::with_capacity(tris.len());
+        let bits = |t: &[Vec3; 3]| t.map(|p| p.to_array().map(f32::to_bits));
+        for (i, t) in tris.iter().enumerate() {
+            let point = t[0] == t[1] && t[1] == t[2];
+            if t.iter().all(|p| p.is_finite()) && !point && seen.insert(bits(t)) {
+                kept.push(Padded(Triangle {
+                    v0: Vec3A::from(t[0] * scale),
+                    v1: Vec3A::from(t[1] * scale),
+                    v2: Vec3A::from(t[2] * scale),
+                }));
+                kept_ids.push(i as u32);
             }
-            (kept, kept_ids)
         }
+        (kept, kept_ids)
     }
 
     /// The BVH of `kept` ([`Bvh::kept`]), its build started at `start`.

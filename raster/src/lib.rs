@@ -325,6 +325,8 @@ pub trait TriangleSource: Sync {
 #[derive(Default)]
 pub struct Rasterizer {
     chunks: Vec<tile::Chunk>,
+    /// The z-buffer storage of one-tile targets.
+    tile_store: zbuf::TileStore,
     /// Triangles and chunks of the last call (`stats` counts from the chunks on demand, so that
     /// frames that do not ask pay nothing).
     submitted: usize,
@@ -423,7 +425,7 @@ impl Rasterizer {
         // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
         let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
         let out = zbuf::Outputs { depth: opts.depth, bary: opts.barycentrics };
-        zbuf::render(&binned, opts.reversed_z, tie, out, isa, target);
+        zbuf::render(&binned, opts.reversed_z, tie, out, isa, target, &mut self.tile_store);
     }
 }
 

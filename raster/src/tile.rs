@@ -224,7 +224,7 @@ impl<'c> Binned<'c> {
             chunks.resize_with(n, Chunk::default);
         }
         let chunks = &mut chunks[..n];
-        chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+        let set_up = |(c, chunk): (usize, &mut Chunk)| {
             let first = c * SETUP_CHUNK;
             let count = (len - first).min(SETUP_CHUNK);
             match input {
@@ -250,7 +250,14 @@ impl<'c> Binned<'c> {
                 }
             }
             chunk.bin(&grid);
-        });
+        };
+        // One chunk (a light map's page, say): set up on this thread, with no parallel
+        // machinery for a call that may hold a few dozen triangles.
+        if let [chunk] = chunks {
+            set_up((0, chunk));
+        } else {
+            chunks.par_iter_mut().enumerate().for_each(set_up);
+        }
         Self { grid, chunks }
     }
 

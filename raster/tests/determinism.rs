@@ -213,3 +213,28 @@ fn triangles_from_a_source_give_the_same_buffers() {
         }
     }
 }
+
+/// One `Rasterizer` reused for a sequence of calls (a light map's pages: one-tile targets, whose
+/// z-buffer the rasterizer keeps) gives each call the buffers of a fresh one: alternating
+/// scenes, sizes, depth orders and tie windows, so that anything left from a call would show.
+#[test]
+fn a_reused_rasterizer_gives_each_call_a_fresh_ones_buffers() {
+    let (cam, tris, ids) = scene();
+    let mut kept = hyrt_raster::Rasterizer::new();
+    let mut target = Target::empty(0, 0);
+    let half = tris.len() / 2;
+    let calls = [
+        (0..tris.len(), 4096, false, 0.0, true),
+        (0..half, 4096, true, TIES[1], false),
+        (half..tris.len(), 64, true, TIES[0], true),
+        (0..half, 4096, false, TIES[0], false),
+        (half..tris.len(), 4096, true, 0.0, true),
+    ];
+    for (k, (range, tile_size, reversed_z, depth_tie, depth)) in calls.into_iter().enumerate() {
+        let opts = RasterOptions { tile_size, reversed_z, depth_tie, depth, ..Default::default() };
+        let (t, i) = (&tris[range.clone()], &ids[range]);
+        kept.rasterize_into(t, i, cam.width, cam.height, &opts, &mut target);
+        let fresh = rasterize(t, i, cam.width, cam.height, &opts);
+        assert!(bits(&target) == bits(&fresh), "call {k}");
+    }
+}

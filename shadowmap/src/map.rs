@@ -718,9 +718,7 @@ impl LightMap {
                     let bin = &binned[offsets[i]..offsets[i + 1]];
                     let (axis, sign, s, t) = CubeFace::ALL[usize::from(key.face)].axes();
                     tris_out.clear();
-                    tris_out.extend(
-                        bin.iter().map(|&id| page_clip(tris[id as usize], l, near, key, (axis, sign, s, t))),
-                    );
+                    page_clip_all(tris, bin, l, near, key, (axis, sign, s, t), tris_out);
                     rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &PAGE_RASTER, target);
                     // The page is the target itself: a cube face at a paged level is a whole
                     // number of pages, and empty texels already hold EMPTY.
@@ -916,9 +914,12 @@ impl LightMap {
         };
         let none = if self.paged { ABSENT } else { EMPTY };
         let mut last: Option<((u32, u32), Option<usize>)> = None;
-        texels.map(|(x, y)| {
+        // A plain loop, not `texels.map`: this runs for every map decision, and the array's map
+        // compiled to a drain of the array, several times the work of the lookups.
+        let mut out = [EMPTY; N];
+        for (o, &(x, y)) in out.iter_mut().zip(&texels) {
             if x >= res || y >= res {
-                return EMPTY;
+                continue;
             }
             let page = (x / PAGE, y / PAGE);
             let slot = match last {
@@ -929,11 +930,12 @@ impl LightMap {
                     s
                 }
             };
-            match slot {
+            *o = match slot {
                 Some(s) => f.id[s * PAGE_TEXELS + ((y % PAGE) * PAGE + x % PAGE) as usize],
                 None => none,
-            }
-        })
+            };
+        }
+        out
     }
 
     /// Whether the map is paged ([`LightMap::build_pages`]): a page not drawn is then
@@ -1465,7 +1467,7 @@ fn finish_page(
 /// (`near / w`) is unchanged. It is computed in `f64` from the vertex's exact offset from the
 /// light and rounded once: the page-relative coordinates keep `f32`'s relative precision, which
 /// a face-wide `s` would not at fine levels.
-#[inline]
+#[cfg(test)]
 fn page_clip(
     tri: [Vec3; 3],
     light: DVec3,
@@ -1473,14 +1475,50 @@ fn page_clip(
     key: &PageKey,
     axes: (usize, f32, usize, usize),
 ) -> [Vec4; 3] {
-    let (axis, sign, s, t) = axes;
+    let mut out = Vec::with_capacity(1);
+    page_clip_all(&[tri], &[0], light, near, key, axes, &mut out);
+    out[0]
+}
+
+/// [`page_clip`] of the triangles `ids` of `tris`, appended to `out`: one branch on the face's
+/// axes, outside the loop, so that every component is picked at compile time (this runs for
+/// every (page, triangle) pair).
+fn page_clip_all(
+    tris: &[[Vec3; 3]],
+    ids: &[u32],
+    light: DVec3,
+    near: f32,
+    key: &PageKey,
+    (axis, sign, s, t): (usize, f32, usize, usize),
+    out: &mut Vec<[Vec4; 3]>,
+) {
+    #[inline(always)]
+    fn run<const AXIS: usize, const S: usize, const T: usize>(
+        tris: &[[Vec3; 3]],
+        ids: &[u32],
+        light: DVec3,
+        (near, sign, n, ox, oy): (f32, f64, f64, f64, f64),
+        out: &mut Vec<[Vec4; 3]>,
+    ) {
+        let clip = |p: Vec3| {
+            let d = p.as_dvec3() - light;
+            let w = sign * d[AXIS];
+            Vec4::new((n * d[S] - ox * w) as f32, (n * d[T] + oy * w) as f32, near, w as f32)
+        };
+        out.extend(ids.iter().map(|&id| {
+            let tri = &tris[id as usize];
+            [clip(tri[0]), clip(tri[1]), clip(tri[2])]
+        }));
+    }
     let n = f64::from(1u32 << key.level);
     let (ox, oy) = (2.0 * f64::from(key.px) + 1.0 - n, 2.0 * f64::from(key.py) + 1.0 - n);
-    tri.map(|p| {
-        let d = p.as_dvec3() - light;
-        let w = f64::from(sign) * d[axis];
-        Vec4::new((n * d[s] - ox * w) as f32, (n * d[t] + oy * w) as f32, near, w as f32)
-    })
+    let k = (near, f64::from(sign), n, ox, oy);
+    match (axis, s, t) {
+        (0, 1, 2) => run::<0, 1, 2>(tris, ids, light, k, out),
+        (1, 0, 2) => run::<1, 0, 2>(tris, ids, light, k, out),
+        (2, 0, 1) => run::<2, 0, 1>(tris, ids, light, k, out),
+        _ => unreachable!("a cube face's axes are (0, 1, 2), (1, 0, 2) or (2, 0, 1)"),
+    }
 }
 
 /// The NDC bounds `(lo, hi)` of a projected triangle or box, and whether a point of it is
@@ -1782,12 +1820,16 @@ const CENTRE_MARGIN: f64 = 1.0 / 64.0;
 /// they bound reaches the face.
 #[inline]
 fn beyond_face(v: &[Vec4], near: f32) -> bool {
-    let all = |f: &dyn Fn(&Vec4) -> bool| v.iter().all(f);
-    all(&|c| c.w < near)
-        || all(&|c| c.x > c.w)
-        || all(&|c| c.x < -c.w)
-        || all(&|c| c.y > c.w)
-        || all(&|c| c.y < -c.w)
+    // One outcode per point, its bits the planes it lies beyond; all beyond one plane if their
+    // AND is not zero. Branch-free: this runs for every triangle and face while binning.
+    let outcode = |c: &Vec4| {
+        u8::from(c.w < near)
+            | u8::from(c.x > c.w) << 1
+            | u8::from(c.x < -c.w) << 2
+            | u8::from(c.y > c.w) << 3
+            | u8::from(c.y < -c.w) << 4
+    };
+    v.iter().fold(0x1f, |all, c| all & outcode(c)) != 0
 }
 
 /// Clip-space triangles and ids of each drawn cube face (module docs), in input order: one pass

@@ -82,6 +82,26 @@ pub(crate) struct ZBuffer<'a> {
     empty: u32,
 }
 
+/// A tile z-buffer's storage, kept between calls by a [`crate::Rasterizer`] for targets of one
+/// tile: a new one would fill both buffers again, every call.
+#[derive(Default)]
+pub(crate) struct TileStore {
+    depth: Vec<f32>,
+    win: Vec<u32>,
+    clean: bool,
+    empty: u32,
+}
+
+impl ZBuffer<'_> {
+    fn from_store(s: TileStore) -> Self {
+        Self { depth: s.depth, win: s.win, clean: s.clean, empty: s.empty, ..Default::default() }
+    }
+
+    fn into_store(self) -> TileStore {
+        TileStore { depth: self.depth, win: self.win, clean: self.clean, empty: self.empty }
+    }
+}
+
 /// Whether fragment `(depth d, triangle tri)` replaces the z-buffer entry `(cur, win)`.
 ///
 /// Without `TIE`: lexicographic (depth, back face, id), a total order on fragments, so the surviving
@@ -308,7 +328,16 @@ pub(crate) struct Outputs {
 /// relative depth tie window (`<= 0` or NaN: exact comparisons); the buffers `out` leaves out
 /// (`target.depth`, `target.bary`) are left empty, and no barycentrics are computed without
 /// `out.bary`.
-pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, isa: Isa, target: &mut Target) {
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn render(
+    binned: &Binned,
+    reversed: bool,
+    tie: f32,
+    out: Outputs,
+    isa: Isa,
+    target: &mut Target,
+    store: &mut TileStore,
+) {
     let grid = binned.grid;
     let len = grid.width as usize * grid.height as usize;
     let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
@@ -334,39 +363,65 @@ pub(crate) fn render(binned: &Binned, reversed: bool, tie: f32, out: Outputs, is
     } else {
         (0..grid.count()).map(|_| None).collect()
     };
+    let how = (reversed, tie, empty_depth, isa);
+    if grid.count() == 1 {
+        // One tile (a light map's page): drawn on this thread, in the z-buffer it keeps, with no
+        // parallel machinery to set up for a call that may hold a few dozen triangles.
+        let (depth, id, bary) =
+            (depth_tiles.into_iter().next(), id_tiles.into_iter().next(), bary_tiles.into_iter().next());
+        let mut zb = ZBuffer::from_store(std::mem::take(store));
+        let buffers = (depth.flatten(), id.expect("one tile"), bary.flatten());
+        draw_tile(binned, how, &mut zb, &mut Vec::new(), 0, buffers);
+        *store = zb.into_store();
+        return;
+    }
     depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).enumerate().for_each_init(
         || (ZBuffer::default(), Vec::new()),
-        |(zb, scratch), (t, ((depth, id), bary))| {
-            if binned.tile_is_empty(t) {
-                depth.into_iter().flatten().for_each(|d| d.fill(empty_depth));
-                id.into_iter().for_each(|i| i.fill(EMPTY_ID));
-                bary.into_iter().flatten().for_each(|b| b.fill([0.0; 2]));
-                return;
-            }
-            zb.reset(grid.rect(t), empty_depth, tie, binned.tile(t));
-            // `!(tie > 0)` includes NaN.
-            match (reversed, tie > 0.0) {
-                (false, false) => zb.draw_all::<false, false>(isa),
-                (false, true) => zb.draw_all::<false, true>(isa),
-                (true, false) => zb.draw_all::<true, false>(isa),
-                (true, true) => zb.draw_all::<true, true>(isa),
-            }
-            match bary {
-                Some(bary) => {
-                    // The barycentric kernels write depths too: without a depth buffer, into
-                    // a tile of scratch that stays in this thread's cache.
-                    let depth = depth.unwrap_or_else(|| {
-                        let [x0, y0, x1, y1] = grid.rect(t);
-                        let w = (x1 - x0) as usize;
-                        scratch.resize(w * (y1 - y0) as usize, 0.0);
-                        scratch.chunks_mut(w).collect()
-                    });
-                    zb.resolve(depth, id, bary, isa)
-                }
-                None => zb.resolve_ids(depth, id),
-            }
-        },
+        |(zb, scratch), (t, ((depth, id), bary))| draw_tile(binned, how, zb, scratch, t, (depth, id, bary)),
     );
+}
+
+/// A tile's rows of the target's buffers: depth (if kept), ids, barycentrics (if kept).
+type TileRows<'b> = (Option<Rows<'b, f32>>, Rows<'b, u32>, Option<Rows<'b, [f32; 2]>>);
+
+/// Draws tile `t` of `binned` with z-buffer `zb` into its rows of the target's buffers.
+fn draw_tile<'c>(
+    binned: &Binned<'c>,
+    (reversed, tie, empty_depth, isa): (bool, f32, f32, Isa),
+    zb: &mut ZBuffer<'c>,
+    scratch: &mut Vec<f32>,
+    t: usize,
+    (depth, id, bary): TileRows,
+) {
+    let grid = binned.grid;
+    if binned.tile_is_empty(t) {
+        depth.into_iter().flatten().for_each(|d| d.fill(empty_depth));
+        id.into_iter().for_each(|i| i.fill(EMPTY_ID));
+        bary.into_iter().flatten().for_each(|b| b.fill([0.0; 2]));
+        return;
+    }
+    zb.reset(grid.rect(t), empty_depth, tie, binned.tile(t));
+    // `!(tie > 0)` includes NaN.
+    match (reversed, tie > 0.0) {
+        (false, false) => zb.draw_all::<false, false>(isa),
+        (false, true) => zb.draw_all::<false, true>(isa),
+        (true, false) => zb.draw_all::<true, false>(isa),
+        (true, true) => zb.draw_all::<true, true>(isa),
+    }
+    match bary {
+        Some(bary) => {
+            // The barycentric kernels write depths too: without a depth buffer, into
+            // a tile of scratch that stays in this thread's cache.
+            let depth = depth.unwrap_or_else(|| {
+                let [x0, y0, x1, y1] = grid.rect(t);
+                let w = (x1 - x0) as usize;
+                scratch.resize(w * (y1 - y0) as usize, 0.0);
+                scratch.chunks_mut(w).collect()
+            });
+            zb.resolve(depth, id, bary, isa)
+        }
+        None => zb.resolve_ids(depth, id),
+    }
 }
 
 /// Gives `buf` exactly `len` elements, with no pass over those it already has: a reused buffer
@@ -451,7 +506,7 @@ mod tests {
         let mut chunks = Vec::new();
         let binned =
             Binned::new(&mut chunks, crate::tile::Input::Slice { tris, ids: Some(ids) }, &ctx, tile, isa);
-        render(&binned, reversed, tie, out, isa, target);
+        render(&binned, reversed, tie, out, isa, target, &mut TileStore::default());
     }
 
     fn bits(t: &Target) -> (Vec<u32>, Vec<u32>, Vec<[u32; 2]>) {

@@ -459,15 +459,21 @@ fn summarise(ids: &[u32], groups: &[u32], by_id: &mut Vec<u32>, by_group: &mut V
         for (rx, run) in row.chunks_exact(r).enumerate() {
             let k = (y / r) * side + rx;
             let v = &mut by_id[first + k];
-            // Most runs hold one id: see it once.
-            if run.iter().all(|&id| id == run[0]) {
+            let group = |id: u32| groups.get(id as usize).copied().unwrap_or(id);
+            // Most runs hold one id: see it (and its group) once.
+            let uniform = run.iter().all(|&id| id == run[0]);
+            if uniform {
                 see(v, run[0]);
             } else {
                 run.iter().for_each(|&id| see(v, id));
             }
             if !groups.is_empty() {
                 let g = &mut by_group[gfirst + k];
-                run.iter().for_each(|&id| see(g, groups.get(id as usize).copied().unwrap_or(id)));
+                if uniform {
+                    see(g, group(run[0]));
+                } else {
+                    run.iter().for_each(|&id| see(g, group(id)));
+                }
             }
         }
     }

@@ -601,9 +601,11 @@ fn csv(knobs: &[Knob], reference: &Row, rows: &[Row]) -> Result<String> {
         let mut f = vec![id];
         f.extend(if r.values.is_empty() { vec![String::new(); knobs.len()] } else { r.values.clone() });
         f.extend([
+            // All three through `round3` (the median is the front's): formatting the min and max
+            // straight would round a value equal to the median the other way, now and then.
             format!("{median:.3}"),
-            format!("{:.3}", m.frame_ms.min),
-            format!("{:.3}", m.frame_ms.max),
+            format!("{:.3}", round3(m.frame_ms.min)),
+            format!("{:.3}", round3(m.frame_ms.max)),
             format!("{:.3}", r.ref_ms),
             format!("{:.4}", r.speedup),
             fmt_psnr(m.psnr_db),

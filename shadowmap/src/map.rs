@@ -640,7 +640,7 @@ impl LightMap {
     /// map of the point light at `light`: a paged map, whose level `k` has `PAGE << k` texels
     /// per face side and holds only the pages asked for. Each page is drawn as its own small
     /// target through a projection that maps the page's square of the face to the whole
-    /// target (see `page_clip`), so the virtual resolution is not bounded by the rasterizer's
+    /// target (see `page_clip_all`), so the virtual resolution is not bounded by the rasterizer's
     /// target size. `opts.resolution` is ignored; `opts.kind` must be [`MapKind::Cube`] (a
     /// paraboloid's tessellation would have to follow the page's resolution: see the crate's
     /// `paged` docs). Otherwise as [`LightMap::build_grouped`].
@@ -920,12 +920,9 @@ impl LightMap {
         };
         let none = if self.paged { ABSENT } else { EMPTY };
         let mut last: Option<((u32, u32), Option<usize>)> = None;
-        // A plain loop, not `texels.map`: this runs for every map decision, and the array's map
-        // compiled to a drain of the array, several times the work of the lookups.
-        let mut out = [EMPTY; N];
-        for (o, &(x, y)) in out.iter_mut().zip(&texels) {
+        texels.map(|(x, y)| {
             if x >= res || y >= res {
-                continue;
+                return EMPTY;
             }
             let page = (x / PAGE, y / PAGE);
             let slot = match last {
@@ -936,12 +933,11 @@ impl LightMap {
                     s
                 }
             };
-            *o = match slot {
+            match slot {
                 Some(s) => f.id[s * PAGE_TEXELS + ((y % PAGE) * PAGE + x % PAGE) as usize],
                 None => none,
-            };
-        }
-        out
+            }
+        })
     }
 
     /// Whether the map is paged ([`LightMap::build_pages`]): a page not drawn is then
@@ -1458,21 +1454,7 @@ fn finish_page(
     }
 }
 
-/// The clip-space position of a cube-map triangle for drawing page `key` alone into a
-/// [`PAGE`]-square target (face axes `(axis, sign, s, t)` of [`CubeFace::axes`]).
-///
-/// The face's clip space is `(d_s, d_t, near, w = sign d_axis)` with NDC `(s, t) = (d_s, d_t) /
-/// w`. At level `k` a face has `n = 2^k` pages per side ([`PAGE`] `<< k` texels); page
-/// `(px, py)` covers NDC `s` in `[-1 + 2 px / n, -1 + 2 (px + 1) / n]` and, since texel row 0 is
-/// NDC `t = +1`, `t` in `[1 - 2 (py + 1) / n, 1 - 2 py / n]`. The affine map
-///
-/// `s' = n s - (2 px + 1 - n)`,  `t' = n t + (2 py + 1 - n)`
-///
-/// takes that square to `[-1, 1]^2`; in clip space (times `w`) it is linear, so the page's
-/// clip position is `(n d_s - (2 px + 1 - n) w, n d_t + (2 py + 1 - n) w, near, w)`, and depth
-/// (`near / w`) is unchanged. It is computed in `f64` from the vertex's exact offset from the
-/// light and rounded once: the page-relative coordinates keep `f32`'s relative precision, which
-/// a face-wide `s` would not at fine levels.
+/// [`page_clip_all`] of one triangle.
 #[cfg(test)]
 fn page_clip(
     tri: [Vec3; 3],
@@ -1486,9 +1468,25 @@ fn page_clip(
     out[0]
 }
 
-/// [`page_clip`] of the triangles `ids` of `tris`, appended to `out`: one branch on the face's
-/// axes, outside the loop, so that every component is picked at compile time (this runs for
-/// every (page, triangle) pair).
+/// The clip-space positions of triangles `ids` of `tris`, appended to `out`, for drawing page
+/// `key` alone into a [`PAGE`]-square target (face axes `(axis, sign, s, t)` of
+/// [`CubeFace::axes`]).
+///
+/// The face's clip space is `(d_s, d_t, near, w = sign d_axis)` with NDC `(s, t) = (d_s, d_t) /
+/// w`. At level `k` a face has `n = 2^k` pages per side ([`PAGE`] `<< k` texels); page
+/// `(px, py)` covers NDC `s` in `[-1 + 2 px / n, -1 + 2 (px + 1) / n]` and, since texel row 0 is
+/// NDC `t = +1`, `t` in `[1 - 2 (py + 1) / n, 1 - 2 py / n]`. The affine map
+///
+/// `s' = n s - (2 px + 1 - n)`,  `t' = n t + (2 py + 1 - n)`
+///
+/// takes that square to `[-1, 1]^2`; in clip space (times `w`) it is linear, so the page's
+/// clip position is `(n d_s - (2 px + 1 - n) w, n d_t + (2 py + 1 - n) w, near, w)`, and depth
+/// (`near / w`) is unchanged. It is computed in `f64` from the vertex's exact offset from the
+/// light and rounded once: the page-relative coordinates keep `f32`'s relative precision, which
+/// a face-wide `s` would not at fine levels.
+///
+/// One branch on the face's axes, outside the loop, so that every component is picked at
+/// compile time: this runs for every (page, triangle) pair.
 fn page_clip_all(
     tris: &[[Vec3; 3]],
     ids: &[u32],
@@ -1816,7 +1814,7 @@ fn holds_centre(a: f64, b: f64) -> bool {
 /// How far, in texels, [`holds_centre`] grows an image's bounds: they come from the exact offsets
 /// of the vertices from the light, in `f64`, so within about 2^-50 of a texel (face NDC within a
 /// few ulps, a face at most 2^22 texels); the rasterizer moves each vertex by at most half its
-/// subpixel step (2^-9 texel) when it snaps it, and `page_clip`'s rounding to `f32` moves it by
+/// subpixel step (2^-9 texel) when it snaps it, and `page_clip_all`'s rounding to `f32` moves it by
 /// less than 2^-17 texel where the image is this small (page-relative coordinates within a
 /// page or two of 0, rounded once). 2^-6 texel clears their sum four times over.
 const CENTRE_MARGIN: f64 = 1.0 / 64.0;

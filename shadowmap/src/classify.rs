@@ -514,6 +514,15 @@ impl Classifier<'_> {
         let (ix, iy) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
         let fp = Footprint::of(map, c);
         let foot = fp.texels;
+        // A footprint within the face holds the point's texel: one of its four (the column and
+        // row the point falls in). Looked up in one page where it lies in one.
+        let (x0, y0) = foot[0];
+        if fp.inside
+            && let Some(q) = map.quad_ids(c.level, c.face, x0, y0)
+        {
+            let centre = q[usize::from(iy != y0) * 2 + usize::from(ix != x0)];
+            return ((ix, iy), fp, [centre, q[0], q[1], q[2], q[3]]);
+        }
         let ids = map.ids_at(c.level, c.face, [(ix, iy), foot[0], foot[1], foot[2], foot[3]]);
         ((ix, iy), fp, ids)
     }

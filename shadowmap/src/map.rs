@@ -940,6 +940,32 @@ impl LightMap {
         })
     }
 
+    /// The ids of the 2x2 texels from `(x0, y0)` (row-major: `(x0, y0)`, `(x0 + 1, y0)`, `(x0,
+    /// y0 + 1)`, `(x0 + 1, y0 + 1)`), as [`LightMap::ids_at`] gives them, when all four lie in
+    /// one page of the face (most footprints: one page table lookup, four neighbouring
+    /// loads); `None` otherwise.
+    #[inline]
+    pub fn quad_ids(&self, level: u8, face: u8, x0: u32, y0: u32) -> Option<[u32; 4]> {
+        let (cx, cy) = (x0 % PAGE, y0 % PAGE);
+        if cx == PAGE - 1
+            || cy == PAGE - 1
+            || x0 + 1 >= self.resolution_at(level)
+            || y0 + 1 >= self.resolution_at(level)
+        {
+            return None;
+        }
+        let Some(f) = self.face_at(level, face) else {
+            return (self.paged && usize::from(face) < self.layout.face_count()).then_some([ABSENT; 4]);
+        };
+        let Some(s) = f.slot(x0 / PAGE, y0 / PAGE) else {
+            return Some([if self.paged { ABSENT } else { EMPTY }; 4]);
+        };
+        let i = s * PAGE_TEXELS + (cy * PAGE + cx) as usize;
+        let p = PAGE as usize;
+        let ids = &f.id[i..i + p + 2];
+        Some([ids[0], ids[1], ids[p], ids[p + 1]])
+    }
+
     /// Whether the map is paged ([`LightMap::build_pages`]): a page not drawn is then
     /// [`ABSENT`], not empty.
     #[inline]

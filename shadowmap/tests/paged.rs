@@ -203,3 +203,45 @@ fn fine_levels_resolve_a_thin_occluder_far_from_the_light() {
     assert_eq!(p, 20);
     assert!(w < 20);
 }
+
+/// `LightMap::quad_ids` (a footprint's 2x2 ids from one page) gives `ids_at`'s ids wherever it
+/// answers, answers wherever the four lie in one page of the face, and reads `ABSENT` in pages
+/// not drawn and on faces with none: every 2x2 block of two levels of a map drawn with every
+/// other page, and of a whole map.
+#[test]
+fn a_footprints_ids_from_one_page_are_the_texels_ids() {
+    let tris = scene(11, 300);
+    let light = Vec3::ZERO;
+    let keys: Vec<PageKey> = [all_pages(1), all_pages(2)]
+        .concat()
+        .into_iter()
+        .filter(|k| (k.px + k.py) % 2 == 0 && k.face != 3)
+        .collect();
+    let paged = LightMap::build_pages(&tris, light, &opts(0), &keys, &[]);
+    let whole = LightMap::build(&tris, light, &opts(64), &[true; 6]);
+    let (mut answered, mut absent) = (0, 0);
+    for (map, levels) in [(&paged, 1..=2u8), (&whole, 0..=0)] {
+        for level in levels {
+            let res = map.resolution_at(level);
+            for face in 0..6u8 {
+                for y in 0..res {
+                    for x in 0..res {
+                        let quad = map.quad_ids(level, face, x, y);
+                        let one_page =
+                            x % PAGE != PAGE - 1 && y % PAGE != PAGE - 1 && x + 1 < res && y + 1 < res;
+                        assert_eq!(quad.is_some(), one_page, "({level}, {face}, {x}, {y})");
+                        if let Some(q) = quad {
+                            let ids =
+                                map.ids_at(level, face, [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)]);
+                            assert_eq!(q, ids, "level {level}, face {face}, ({x}, {y})");
+                            answered += 1;
+                            absent += usize::from(q[0] == ABSENT);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(answered > 10_000 && absent > 1_000, "{answered} answered, {absent} absent");
+    assert!(whole.quad_ids(0, 0, 0, 0).is_some_and(|q| q.iter().all(|&id| id != ABSENT)));
+}

@@ -400,7 +400,8 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         ],
         1,
     );
-    // CPU time of the indirect pass per (point, VPL) pair: wall time times the threads.
+    // CPU time of a pass per unit (the indirect pass per (point, VPL) pair, ...): wall time
+    // times the threads.
     let threads = rayon::current_num_threads() as f64;
     let per_pair = |ms: f64, pairs: u64| if pairs == 0 { 0.0 } else { ms * 1e6 * threads / pairs as f64 };
     for r in results {
@@ -426,6 +427,48 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         ]);
     }
     s.push_str(&t4.markdown());
+
+    let _ = writeln!(
+        s,
+        "\n### Cost per unit: CPU ns per map decision, border ray, shadow ray and mirror ray\n\n\
+         A pass's median time times the threads, divided by what it counted in a frame: the map \
+         decisions of SMeRTS's classify pass ((camera hit, light) pairs, with their direct light), \
+         its border rays (`shadow_rays`: hint first, those pixels shaded again), the reference's \
+         shadow rays (its `direct` pass, shading included; rasterized visibility), and the mirror \
+         rays of each (`specular`, their hits shaded).\n"
+    );
+    let mut tu = Table::new(
+        &[
+            "scene",
+            "map decisions",
+            "ns per decision",
+            "border rays",
+            "ns per border ray",
+            "reference shadow rays",
+            "ns per reference shadow ray",
+            "ns per mirror ray reference / SMeRTS",
+        ],
+        1,
+    );
+    for r in results {
+        let (b, c) = (r.get("rt-raster"), r.get("smerts-cube"));
+        let pass = |m: &Measurement, k: &str| m.pass_ms.get(k).copied().unwrap_or(0.0);
+        tu.row(vec![
+            r.scene.clone(),
+            n(c.map_decisions),
+            format!("{:.1}", per_pair(pass(c, "classify"), c.map_decisions)),
+            n(c.rays.shadow),
+            format!("{:.0}", per_pair(pass(c, "shadow_rays"), c.rays.shadow)),
+            n(b.rays.shadow),
+            format!("{:.0}", per_pair(pass(b, "direct"), b.rays.shadow)),
+            format!(
+                "{:.0} / {:.0}",
+                per_pair(pass(b, "specular"), b.rays.specular),
+                per_pair(pass(c, "specular"), c.rays.specular)
+            ),
+        ]);
+    }
+    s.push_str(&tu.markdown());
 
     let _ = writeln!(s, "\n### Table 4.5: both together (SMeRTS + VPL maps) vs the full reference\n");
     let mut t5 = Table::new(

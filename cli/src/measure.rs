@@ -58,6 +58,9 @@ pub struct Measurement {
     pub light_map_bytes: u64,
     /// (camera point, VPL) pairs of the indirect pass per frame (`FrameStats::vpl_pairs`).
     pub vpl_pairs: u64,
+    /// Map-based shadows: the (camera hit, light) pairs the classify pass decides per frame
+    /// (lit, shadowed, or left to a ray; `LightStats`), summed over the lights.
+    pub map_decisions: u64,
     /// Against the reference film, if one was given.
     pub psnr_db: Option<f64>,
     /// Map-based shadows with a check frame: (pixel, light) pairs whose map decision a shadow
@@ -93,6 +96,10 @@ pub fn cold_first_frame(scene: &Scene, options: Options) -> (Renderer<'_>, Frame
 /// The light maps' memory in `frame` (0 without map-based shadows).
 fn light_map_bytes(frame: &Frame) -> u64 {
     frame.stats.lights.iter().map(|l| l.map_bytes).sum()
+}
+
+fn map_decisions(frame: &Frame) -> u64 {
+    frame.stats.lights.iter().map(|l| l.lit + l.shadowed + l.undecided).sum()
 }
 
 /// Measures `configs` on `scene`, their timed frames alternated, and compares each film with
@@ -137,6 +144,7 @@ pub fn measure(
             map_bytes: light_map_bytes(&f) + f.stats.vpl_map_bytes,
             light_map_bytes: light_map_bytes(&f),
             vpl_pairs: f.stats.vpl_pairs,
+            map_decisions: map_decisions(&f),
             psnr_db: None,
             wrong_pairs: None,
             wrong_pixels: None,
@@ -160,6 +168,7 @@ pub fn measure(
             }
             out[i].rays = f.stats.rays;
             out[i].light_map_bytes = light_map_bytes(&f);
+            out[i].map_decisions = map_decisions(&f);
             out[i].film = f.film;
         }
     }

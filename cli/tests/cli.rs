@@ -500,6 +500,23 @@ fn bench_writes_the_thesis_tables() {
         assert_eq!(smerts[k].trim(), format!("{:.1}", c["pass_ms"][pass].as_f64().unwrap()), "{pass}");
     }
     assert!(configs.iter().any(|c| c["label"] == "rt" && c["wrong_pixels"].is_null()));
+    // Cost per unit: SMeRTS's map decisions, and the classify pass's CPU ns per decision (its
+    // median times the threads over the decisions).
+    let unit: Vec<&str> = md
+        .split("### Cost per unit")
+        .nth(1)
+        .expect("cost-per-unit table")
+        .lines()
+        .find(|l| l.starts_with("| cornell"))
+        .unwrap()
+        .split(" | ")
+        .collect();
+    let decisions = c["map_decisions"].as_u64().unwrap();
+    assert!(decisions > 0);
+    assert_eq!(unit[1].trim().replace(',', ""), decisions.to_string());
+    let ns =
+        c["pass_ms"]["classify"].as_f64().unwrap() * 1e6 * v["threads"].as_f64().unwrap() / decisions as f64;
+    assert_eq!(unit[2].trim(), format!("{ns:.1}"));
 
     let (ok, _, err) = common::hyrt(&["bench", "missing-scene.toml", "--out", out]);
     assert!(!ok && err.contains("missing-scene.toml"), "{err}");

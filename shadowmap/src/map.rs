@@ -285,6 +285,13 @@ pub fn paged_memory_bound(pages: usize) -> usize {
 /// No page in a dense page table.
 const NO_PAGE: u32 = u32::MAX;
 
+/// Where a texel's id is: at an index of its face's `id`, or its page's one id.
+#[derive(Clone, Copy, Debug)]
+enum Stored {
+    At(usize),
+    Solid(u32),
+}
+
 /// One face's texels at one level: the pages drawn, each [`PAGE`] texels square (empty when
 /// none was drawn).
 #[derive(Clone, Debug, Default)]
@@ -297,8 +304,14 @@ struct Face {
     dense: Vec<u32>,
     /// The same for large faces.
     sparse: rustc_hash::FxHashMap<u32, u32>,
-    /// Per slot, [`PAGE_TEXELS`] ids, row-major.
+    /// Per stored page, [`PAGE_TEXELS`] ids, row-major: slot `s`'s at page `start[s]` (at
+    /// `s` when `start` is empty, as in whole maps).
     id: Vec<u32>,
+    /// Paged maps: per slot, the one id every texel of the page holds, or [`MIXED`] where the
+    /// page's texels are stored (in `id`, from page `start[s]`). Most pages hold one triangle
+    /// or none (a wall, a floor, the sky), and store nothing then. Empty in whole maps.
+    solid: Vec<u32>,
+    start: Vec<u32>,
     /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major:
     /// distances are made from them only when asked for ([`LightMap::depth_at`]), which the
     /// classifier does only for planes seen edge-on. Empty in a paged map (a ray decides those
@@ -358,11 +371,69 @@ impl Face {
         s
     }
 
-    /// Where texel `(x, y)` is stored, if its page was drawn.
+    /// Texel `(x, y)`, if its page was drawn: where its id is stored, or its page's one id.
     #[inline]
-    fn index(&self, x: u32, y: u32) -> Option<usize> {
+    fn index(&self, x: u32, y: u32) -> Option<Stored> {
         let s = self.slot(x / PAGE, y / PAGE)?;
-        Some(s * PAGE_TEXELS + ((y % PAGE) * PAGE + x % PAGE) as usize)
+        Some(self.texel_of(s, ((y % PAGE) * PAGE + x % PAGE) as usize))
+    }
+
+    /// Texel `t` (row-major in the page) of slot `s`.
+    #[inline]
+    fn texel_of(&self, s: usize, t: usize) -> Stored {
+        match self.solid.get(s) {
+            Some(&id) if id != MIXED => Stored::Solid(id),
+            _ => Stored::At(self.page_start(s) * PAGE_TEXELS + t),
+        }
+    }
+
+    /// The page of `id` where slot `s`'s texels are stored (not a solid page).
+    #[inline]
+    fn page_start(&self, s: usize) -> usize {
+        self.start.get(s).map_or(s, |&p| p as usize)
+    }
+
+    /// Appends slot `s` of `from` (a paged face) as page `(px, py)`: its ids (or its one id)
+    /// and its region summaries.
+    fn push_page(&mut self, from: &Face, s: usize, (px, py): (u32, u32), groups: bool) {
+        self.insert(px, py);
+        match from.texel_of(s, 0) {
+            Stored::Solid(id) => {
+                self.solid.push(id);
+                self.start.push(0);
+            }
+            Stored::At(i) => {
+                self.solid.push(MIXED);
+                self.start.push((self.id.len() / PAGE_TEXELS) as u32);
+                self.id.extend_from_slice(&from.id[i..i + PAGE_TEXELS]);
+            }
+        }
+        self.region.extend_from_slice(&from.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
+        if groups {
+            self.region_group.extend_from_slice(&from.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
+        }
+    }
+
+    /// Paged maps: stores the pages whose texels all hold one id (`solid[s]`, [`MIXED`] for the
+    /// others) as that id alone, and the others packed in slot order. `id` holds every slot's
+    /// texels in slot order before, those of solid pages never written (so never mapped in).
+    fn pack_solid_pages(&mut self, solid: Vec<u32>) {
+        let mut start = Vec::with_capacity(solid.len());
+        let mut kept = 0;
+        for (s, &one) in solid.iter().enumerate() {
+            if one != MIXED {
+                start.push(0);
+                continue;
+            }
+            if kept != s {
+                self.id.copy_within(s * PAGE_TEXELS..(s + 1) * PAGE_TEXELS, kept * PAGE_TEXELS);
+            }
+            start.push(kept as u32);
+            kept += 1;
+        }
+        self.id.truncate(kept * PAGE_TEXELS);
+        self.id.shrink_to_fit();
+        (self.solid, self.start) = (solid, start);
     }
 
     /// The pages drawn, by `(px, py)`.
@@ -385,7 +456,13 @@ impl Face {
         if self.is_empty() {
             return 0;
         }
-        (self.id.len() + self.depth.len() + self.region.len() + self.region_group.len() + self.dense.len())
+        (self.id.len()
+            + self.solid.len()
+            + self.start.len()
+            + self.depth.len()
+            + self.region.len()
+            + self.region_group.len()
+            + self.dense.len())
             * 4
             + self.sparse.len() * 8
     }
@@ -714,7 +791,7 @@ impl LightMap {
             );
         }
         // Faces are in (level, face) order and their slots in `pages` order: so is `slots`.
-        let triangles: u64 = pages
+        let drawn: Vec<(u64, u32)> = pages
             .par_iter()
             .zip(slots.into_par_iter())
             .enumerate()
@@ -727,17 +804,29 @@ impl LightMap {
                     page_clip_all(tris, bin, l, near, key, (axis, sign, s, t), tris_out);
                     rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &PAGE_RASTER, target);
                     // The page is the target itself: a cube face at a paged level is a whole
-                    // number of pages, and empty texels already hold EMPTY.
-                    id.copy_from_slice(&target.id);
+                    // number of pages, and empty texels already hold EMPTY. A page of one id
+                    // is kept as that id (`Face::pack_solid_pages`): its slot is not written.
+                    let first = target.id[0];
+                    let one = if target.id.iter().all(|&t| t == first) { first } else { MIXED };
+                    if one == MIXED {
+                        id.copy_from_slice(&target.id);
+                    }
                     region.clear();
                     region_group.clear();
                     summarise(&target.id, groups, region, region_group);
                     reg.copy_from_slice(region);
                     reg_g.copy_from_slice(region_group);
-                    bin.len() as u64
+                    (bin.len() as u64, one)
                 },
             )
-            .sum();
+            .collect();
+        let triangles: u64 = drawn.iter().map(|d| d.0).sum();
+        // The one id of each page (or MIXED), in slot order face by face, as `slots` was.
+        let mut ones = drawn.into_iter().map(|d| d.1);
+        for face in map.faces.iter_mut().filter(|f| !f.is_empty()) {
+            let solid: Vec<u32> = ones.by_ref().take(face.pages()).collect();
+            face.pack_solid_pages(solid);
+        }
         for key in &pages {
             map.drawn[usize::from(key.face)] = true;
         }
@@ -890,7 +979,7 @@ impl LightMap {
     /// face of a whole map that was not drawn, `Err(ABSENT)` in a page of a paged map that was
     /// not drawn.
     #[inline]
-    fn texel(&self, level: u8, face: u8, ix: u32, iy: u32) -> Result<(&Face, usize), u32> {
+    fn texel(&self, level: u8, face: u8, ix: u32, iy: u32) -> Result<(&Face, Stored), u32> {
         let res = self.resolution_at(level);
         if ix >= res || iy >= res {
             return Err(EMPTY);
@@ -933,8 +1022,9 @@ impl LightMap {
                     s
                 }
             };
-            match slot {
-                Some(s) => f.id[s * PAGE_TEXELS + ((y % PAGE) * PAGE + x % PAGE) as usize],
+            match slot.map(|s| f.texel_of(s, ((y % PAGE) * PAGE + x % PAGE) as usize)) {
+                Some(Stored::At(i)) => f.id[i],
+                Some(Stored::Solid(id)) => id,
                 None => none,
             }
         })
@@ -960,7 +1050,10 @@ impl LightMap {
         let Some(s) = f.slot(x0 / PAGE, y0 / PAGE) else {
             return Some([if self.paged { ABSENT } else { EMPTY }; 4]);
         };
-        let i = s * PAGE_TEXELS + (cy * PAGE + cx) as usize;
+        let i = match f.texel_of(s, (cy * PAGE + cx) as usize) {
+            Stored::At(i) => i,
+            Stored::Solid(id) => return Some([id; 4]),
+        };
         let p = PAGE as usize;
         let ids = &f.id[i..i + p + 2];
         Some([ids[0], ids[1], ids[p], ids[p + 1]])
@@ -978,7 +1071,8 @@ impl LightMap {
     #[inline]
     pub fn id_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> u32 {
         match self.texel(level, face, ix, iy) {
-            Ok((f, i)) => f.id[i],
+            Ok((f, Stored::At(i))) => f.id[i],
+            Ok((_, Stored::Solid(id))) => id,
             Err(e) => e,
         }
     }
@@ -987,7 +1081,7 @@ impl LightMap {
     #[inline]
     pub fn prefetch(&self, level: u8, face: u8, ix: u32, iy: u32) {
         #[cfg(target_arch = "x86_64")]
-        if let Ok((f, i)) = self.texel(level, face, ix, iy) {
+        if let Ok((f, Stored::At(i))) = self.texel(level, face, ix, iy) {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             // SAFETY: prefetching has no effect on memory or on the program's state; SSE is
             // part of x86-64.
@@ -1064,10 +1158,11 @@ impl LightMap {
     /// [`LightMap::depth`] at `level`.
     #[inline]
     pub fn depth_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> f32 {
-        let Ok((f, i)) = self.texel(level, face, ix, iy) else { return f32::INFINITY };
         if self.paged {
-            return if f.id[i] == EMPTY { f32::INFINITY } else { f32::NAN };
+            let id = self.id_at(level, face, ix, iy);
+            return if id == EMPTY || id == ABSENT { f32::INFINITY } else { f32::NAN };
         }
+        let Ok((f, Stored::At(i))) = self.texel(level, face, ix, iy) else { return f32::INFINITY };
         let d = f.depth[i];
         // Reversed-Z: empty texels hold depth 0, drawn ones near / w >= 2^-21.
         if d.is_nan() || d <= 0.0 {
@@ -1257,14 +1352,8 @@ impl LightMap {
             }
             let f = &other.faces[usize::from(key.level) * nf + usize::from(key.face)];
             let s = f.slot(key.px, key.py).expect("listed page");
-            let id = &f.id[s * PAGE_TEXELS..][..PAGE_TEXELS];
             let face = &mut self.faces[usize::from(key.level) * nf + usize::from(key.face)];
-            face.insert(key.px, key.py);
-            face.id.extend_from_slice(id);
-            face.region.extend_from_slice(&f.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
-            if groups {
-                face.region_group.extend_from_slice(&f.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
-            }
+            face.push_page(f, s, (key.px, key.py), groups);
             self.drawn[usize::from(key.face)] = true;
             self.pages_rasterized += 1;
         }
@@ -1291,13 +1380,7 @@ impl LightMap {
                     continue;
                 }
                 let s = face.slot(px, py).expect("listed page");
-                out.insert(px, py);
-                out.id.extend_from_slice(&face.id[s * PAGE_TEXELS..][..PAGE_TEXELS]);
-                out.region.extend_from_slice(&face.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
-                if groups {
-                    out.region_group
-                        .extend_from_slice(&face.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
-                }
+                out.push_page(face, s, (px, py), groups);
             }
             *face = out;
         }

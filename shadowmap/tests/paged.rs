@@ -245,3 +245,55 @@ fn a_footprints_ids_from_one_page_are_the_texels_ids() {
     assert!(answered > 10_000 && absent > 1_000, "{answered} answered, {absent} absent");
     assert!(whole.quad_ids(0, 0, 0, 0).is_some_and(|q| q.iter().all(|&id| id != ABSENT)));
 }
+
+/// A page whose texels all hold one id stores that id alone, and reads as a stored one: a
+/// light inside a box (two triangles a side, so that each face's diagonal pages hold two ids
+/// and the others one) reads the whole map's ids at every texel of every face, through
+/// `id_at`, `ids_at` and `quad_ids`, after a merge and after an eviction too, and stores
+/// under half the texels of its pages.
+#[test]
+fn pages_of_one_id_store_that_id_alone() {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) * 2.0;
+    let corner = |i: u32| {
+        c(
+            if i & 1 == 0 { -1.0 } else { 1.0 },
+            if i & 2 == 0 { -1.0 } else { 1.0 },
+            if i & 4 == 0 { -1.0 } else { 1.0 },
+        )
+    };
+    let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+    let tris: Vec<[Vec3; 3]> = quads
+        .iter()
+        .flat_map(|q| {
+            [[corner(q[0]), corner(q[1]), corner(q[2])], [corner(q[0]), corner(q[2]), corner(q[3])]]
+        })
+        .collect();
+    let light = Vec3::new(0.01, 0.02, 0.03);
+    let level = 3;
+    let keys = all_pages(level);
+    let (even, odd): (Vec<PageKey>, Vec<PageKey>) = keys.iter().partition(|k| (k.px + k.py) % 2 == 0);
+    let paged = LightMap::build_pages(&tris, light, &opts(0), &keys, &[]);
+    let mut merged = LightMap::build_pages(&tris, light, &opts(0), &even, &[]);
+    merged.merge(LightMap::build_pages(&tris, light, &opts(0), &odd, &[]));
+    let mut kept = paged.clone();
+    kept.retain_pages(|k| k.face != 4);
+    let res = PAGE << level;
+    let whole = LightMap::build(&tris, light, &opts(res), &[true; 6]);
+    for face in 0..6u8 {
+        for y in 0..res {
+            for x in 0..res {
+                let want = whole.id_at(0, face, x, y);
+                assert_eq!(paged.id_at(level, face, x, y), want, "({face}, {x}, {y})");
+                assert_eq!(merged.id_at(level, face, x, y), want, "merged ({face}, {x}, {y})");
+                assert_eq!(kept.id_at(level, face, x, y), if face == 4 { ABSENT } else { want });
+                assert_eq!(paged.ids_at(level, face, [(x, y)]), [want]);
+                if let Some(q) = paged.quad_ids(level, face, x, y) {
+                    assert_eq!(q[0], want);
+                }
+            }
+        }
+    }
+    let texels = keys.len() * (PAGE * PAGE) as usize * 4;
+    assert!(paged.memory_bytes() < texels / 2, "{} of {texels}", paged.memory_bytes());
+    assert_eq!(merged.memory_bytes(), paged.memory_bytes());
+}

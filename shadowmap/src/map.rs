@@ -285,11 +285,59 @@ pub fn paged_memory_bound(pages: usize) -> usize {
 /// No page in a dense page table.
 const NO_PAGE: u32 = u32::MAX;
 
-/// Where a texel's id is: at an index of its face's `id`, or its page's one id.
+/// Where a texel's id is: at an index of its face's `id`, or known (its page's one id, or
+/// read through its page's palette).
 #[derive(Clone, Copy, Debug)]
 enum Stored {
     At(usize),
-    Solid(u32),
+    Id(u32),
+}
+
+/// How a drawn page's ids are kept ([`PageIds::of`]).
+enum PageIds {
+    /// Every texel holds this id.
+    One(u32),
+    /// The page's distinct ids (at most 256), and each texel's index among them.
+    Palette(Vec<u32>, Box<[u8; PAGE_TEXELS]>),
+    /// Four bytes a texel.
+    Ids,
+}
+
+impl PageIds {
+    /// The least storage for a page's ids `ids` (row-major): most pages see one triangle or
+    /// none, most others a few (the palette is searched on a change of id only: runs are long).
+    fn of(ids: &[u32]) -> Self {
+        let first = ids[0];
+        if ids.iter().all(|&t| t == first) {
+            return PageIds::One(first);
+        }
+        let (mut palette, mut index) = (vec![first], Box::new([0u8; PAGE_TEXELS]));
+        // Each id's place in the palette, by open addressing (at most half full): `MIXED` is
+        // never a texel's id.
+        const SLOTS: usize = 512;
+        let mut table = [(MIXED, 0u8); SLOTS];
+        let hash = |id: u32| (id.wrapping_mul(0x9e37_79b9) >> 23) as usize;
+        table[hash(first)] = (first, 0);
+        let mut last = (first, 0u8);
+        for (k, &id) in ids.iter().enumerate() {
+            if id != last.0 {
+                let mut h = hash(id);
+                while table[h].0 != id && table[h].0 != MIXED {
+                    h = (h + 1) % SLOTS;
+                }
+                if table[h].0 == MIXED {
+                    if palette.len() == 256 {
+                        return PageIds::Ids;
+                    }
+                    table[h] = (id, palette.len() as u8);
+                    palette.push(id);
+                }
+                last = (id, table[h].1);
+            }
+            index[k] = last.1;
+        }
+        PageIds::Palette(palette, index)
+    }
 }
 
 /// One face's texels at one level: the pages drawn, each [`PAGE`] texels square (empty when
@@ -311,6 +359,11 @@ struct Face {
     /// page's texels are stored (in `id`, from page `start[s]`). Most pages hold one triangle
     /// or none (a wall, a floor, the sky), and store nothing then. Empty in whole maps.
     solid: Vec<u32>,
+    /// Paged maps: per slot, where its palette starts in `palette` ([`NO_PAGE`] if it has
+    /// none); a palette page's indices are page `start[s]` of `index`.
+    pal: Vec<u32>,
+    palette: Vec<u32>,
+    index: Vec<u8>,
     start: Vec<u32>,
     /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major:
     /// distances are made from them only when asked for ([`LightMap::depth_at`]), which the
@@ -381,9 +434,72 @@ impl Face {
     /// Texel `t` (row-major in the page) of slot `s`.
     #[inline]
     fn texel_of(&self, s: usize, t: usize) -> Stored {
-        match self.solid.get(s) {
-            Some(&id) if id != MIXED => Stored::Solid(id),
+        match (self.solid.get(s), self.pal.get(s)) {
+            (Some(&id), _) if id != MIXED => Stored::Id(id),
+            (_, Some(&p)) if p != NO_PAGE => {
+                let i = self.index[self.page_start(s) * PAGE_TEXELS + t];
+                Stored::Id(self.palette[p as usize + usize::from(i)])
+            }
             _ => Stored::At(self.page_start(s) * PAGE_TEXELS + t),
+        }
+    }
+
+    /// Where texel `t` of slot `s` is read from (its index in a palette page; nothing to read
+    /// in a page of one id), for a prefetch: computed without loading it.
+    #[inline]
+    fn texel_ptr(&self, s: usize, t: usize) -> Option<*const i8> {
+        match (self.solid.get(s), self.pal.get(s)) {
+            (Some(&id), _) if id != MIXED => None,
+            (_, Some(&p)) if p != NO_PAGE => {
+                self.index.get(self.page_start(s) * PAGE_TEXELS + t).map(|b| (b as *const u8).cast())
+            }
+            _ => self.id.get(self.page_start(s) * PAGE_TEXELS + t).map(|v| (v as *const u32).cast()),
+        }
+    }
+
+    /// The ids of the 2x2 texels from texel `t` of slot `s` (all four in the page).
+    #[inline]
+    fn quad(&self, s: usize, t: usize) -> [u32; 4] {
+        let p = PAGE as usize;
+        if let (Some(&MIXED), Some(&at)) = (self.solid.get(s), self.pal.get(s))
+            && at != NO_PAGE
+        {
+            let i = self.page_start(s) * PAGE_TEXELS + t;
+            let (index, palette) = (&self.index[i..i + p + 2], &self.palette[at as usize..]);
+            let id = |k: usize| palette[usize::from(index[k])];
+            return [id(0), id(1), id(p), id(p + 1)];
+        }
+        if let Stored::At(i) = self.texel_of(s, t) {
+            let ids = &self.id[i..i + p + 2];
+            return [ids[0], ids[1], ids[p], ids[p + 1]];
+        }
+        [t, t + 1, t + p, t + p + 1].map(|u| match self.texel_of(s, u) {
+            Stored::Id(id) => id,
+            Stored::At(i) => self.id[i],
+        })
+    }
+
+    /// Appends a page's storage for its next slot (the slot itself is inserted by the caller).
+    fn push_ids(&mut self, ids: PageIds, stored: &[u32]) {
+        match ids {
+            PageIds::One(id) => {
+                self.solid.push(id);
+                self.pal.push(NO_PAGE);
+                self.start.push(0);
+            }
+            PageIds::Palette(palette, index) => {
+                self.solid.push(MIXED);
+                self.pal.push(self.palette.len() as u32);
+                self.start.push((self.index.len() / PAGE_TEXELS) as u32);
+                self.palette.extend_from_slice(&palette);
+                self.index.extend_from_slice(&index[..]);
+            }
+            PageIds::Ids => {
+                self.solid.push(MIXED);
+                self.pal.push(NO_PAGE);
+                self.start.push((self.id.len() / PAGE_TEXELS) as u32);
+                self.id.extend_from_slice(stored);
+            }
         }
     }
 
@@ -393,47 +509,58 @@ impl Face {
         self.start.get(s).map_or(s, |&p| p as usize)
     }
 
-    /// Appends slot `s` of `from` (a paged face) as page `(px, py)`: its ids (or its one id)
-    /// and its region summaries.
+    /// Appends slot `s` of `from` (a paged face) as page `(px, py)`: its ids (as `from` keeps
+    /// them) and its region summaries.
     fn push_page(&mut self, from: &Face, s: usize, (px, py): (u32, u32), groups: bool) {
         self.insert(px, py);
-        match from.texel_of(s, 0) {
-            Stored::Solid(id) => {
-                self.solid.push(id);
-                self.start.push(0);
+        let ids = match (from.solid.get(s), from.pal.get(s)) {
+            (Some(&id), _) if id != MIXED => PageIds::One(id),
+            (_, Some(&p)) if p != NO_PAGE => {
+                let i = from.page_start(s) * PAGE_TEXELS;
+                let index: Box<[u8; PAGE_TEXELS]> =
+                    Box::new(from.index[i..i + PAGE_TEXELS].try_into().expect("a page of indices"));
+                let n = usize::from(index.iter().copied().max().unwrap_or(0)) + 1;
+                PageIds::Palette(from.palette[p as usize..p as usize + n].to_vec(), index)
             }
-            Stored::At(i) => {
-                self.solid.push(MIXED);
-                self.start.push((self.id.len() / PAGE_TEXELS) as u32);
-                self.id.extend_from_slice(&from.id[i..i + PAGE_TEXELS]);
-            }
-        }
+            _ => PageIds::Ids,
+        };
+        let i = from.page_start(s) * PAGE_TEXELS;
+        let stored = if matches!(ids, PageIds::Ids) { &from.id[i..i + PAGE_TEXELS] } else { &[][..] };
+        self.push_ids(ids, stored);
         self.region.extend_from_slice(&from.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
         if groups {
             self.region_group.extend_from_slice(&from.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
         }
     }
 
-    /// Paged maps: stores the pages whose texels all hold one id (`solid[s]`, [`MIXED`] for the
-    /// others) as that id alone, and the others packed in slot order. `id` holds every slot's
-    /// texels in slot order before, those of solid pages never written (so never mapped in).
-    fn pack_solid_pages(&mut self, solid: Vec<u32>) {
-        let mut start = Vec::with_capacity(solid.len());
-        let mut kept = 0;
-        for (s, &one) in solid.iter().enumerate() {
-            if one != MIXED {
-                start.push(0);
-                continue;
+    /// Paged maps: keeps each slot's ids as `kept` says ([`PageIds`]), the pages of four
+    /// bytes a texel packed in slot order. `id` holds every slot's texels in slot order
+    /// before, only those of [`PageIds::Ids`] pages written (the others never mapped in).
+    fn pack_pages(&mut self, kept: Vec<PageIds>) {
+        let all = std::mem::take(&mut self.id);
+        let (slots, mut stored) = (kept.len(), 0);
+        self.solid = Vec::with_capacity(slots);
+        self.pal = Vec::with_capacity(slots);
+        self.start = Vec::with_capacity(slots);
+        let mut id = all;
+        for (s, ids) in kept.into_iter().enumerate() {
+            if matches!(ids, PageIds::Ids) {
+                if stored != s {
+                    id.copy_within(s * PAGE_TEXELS..(s + 1) * PAGE_TEXELS, stored * PAGE_TEXELS);
+                }
+                self.solid.push(MIXED);
+                self.pal.push(NO_PAGE);
+                self.start.push(stored as u32);
+                stored += 1;
+            } else {
+                self.push_ids(ids, &[]);
             }
-            if kept != s {
-                self.id.copy_within(s * PAGE_TEXELS..(s + 1) * PAGE_TEXELS, kept * PAGE_TEXELS);
-            }
-            start.push(kept as u32);
-            kept += 1;
         }
-        self.id.truncate(kept * PAGE_TEXELS);
-        self.id.shrink_to_fit();
-        (self.solid, self.start) = (solid, start);
+        id.truncate(stored * PAGE_TEXELS);
+        id.shrink_to_fit();
+        self.id = id;
+        self.palette.shrink_to_fit();
+        self.index.shrink_to_fit();
     }
 
     /// The pages drawn, by `(px, py)`.
@@ -456,14 +583,17 @@ impl Face {
         if self.is_empty() {
             return 0;
         }
-        (self.id.len()
-            + self.solid.len()
-            + self.start.len()
-            + self.depth.len()
-            + self.region.len()
-            + self.region_group.len()
-            + self.dense.len())
-            * 4
+        self.index.len()
+            + (self.id.len()
+                + self.solid.len()
+                + self.pal.len()
+                + self.palette.len()
+                + self.start.len()
+                + self.depth.len()
+                + self.region.len()
+                + self.region_group.len()
+                + self.dense.len())
+                * 4
             + self.sparse.len() * 8
     }
 }
@@ -791,7 +921,7 @@ impl LightMap {
             );
         }
         // Faces are in (level, face) order and their slots in `pages` order: so is `slots`.
-        let drawn: Vec<(u64, u32)> = pages
+        let drawn: Vec<(u64, PageIds)> = pages
             .par_iter()
             .zip(slots.into_par_iter())
             .enumerate()
@@ -804,11 +934,11 @@ impl LightMap {
                     page_clip_all(tris, bin, l, near, key, (axis, sign, s, t), tris_out);
                     rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &PAGE_RASTER, target);
                     // The page is the target itself: a cube face at a paged level is a whole
-                    // number of pages, and empty texels already hold EMPTY. A page of one id
-                    // is kept as that id (`Face::pack_solid_pages`): its slot is not written.
-                    let first = target.id[0];
-                    let one = if target.id.iter().all(|&t| t == first) { first } else { MIXED };
-                    if one == MIXED {
+                    // number of pages, and empty texels already hold EMPTY. A page of one id,
+                    // or of a few, is kept as that id or a palette (`Face::pack_pages`): its
+                    // slot is not written.
+                    let kept = PageIds::of(&target.id);
+                    if matches!(kept, PageIds::Ids) {
                         id.copy_from_slice(&target.id);
                     }
                     region.clear();
@@ -816,16 +946,16 @@ impl LightMap {
                     summarise(&target.id, groups, region, region_group);
                     reg.copy_from_slice(region);
                     reg_g.copy_from_slice(region_group);
-                    (bin.len() as u64, one)
+                    (bin.len() as u64, kept)
                 },
             )
             .collect();
         let triangles: u64 = drawn.iter().map(|d| d.0).sum();
-        // The one id of each page (or MIXED), in slot order face by face, as `slots` was.
-        let mut ones = drawn.into_iter().map(|d| d.1);
+        // How each page's ids are kept, in slot order face by face, as `slots` was.
+        let mut kept = drawn.into_iter().map(|d| d.1);
         for face in map.faces.iter_mut().filter(|f| !f.is_empty()) {
-            let solid: Vec<u32> = ones.by_ref().take(face.pages()).collect();
-            face.pack_solid_pages(solid);
+            let pages: Vec<PageIds> = kept.by_ref().take(face.pages()).collect();
+            face.pack_pages(pages);
         }
         for key in &pages {
             map.drawn[usize::from(key.face)] = true;
@@ -1024,7 +1154,7 @@ impl LightMap {
             };
             match slot.map(|s| f.texel_of(s, ((y % PAGE) * PAGE + x % PAGE) as usize)) {
                 Some(Stored::At(i)) => f.id[i],
-                Some(Stored::Solid(id)) => id,
+                Some(Stored::Id(id)) => id,
                 None => none,
             }
         })
@@ -1050,13 +1180,7 @@ impl LightMap {
         let Some(s) = f.slot(x0 / PAGE, y0 / PAGE) else {
             return Some([if self.paged { ABSENT } else { EMPTY }; 4]);
         };
-        let i = match f.texel_of(s, (cy * PAGE + cx) as usize) {
-            Stored::At(i) => i,
-            Stored::Solid(id) => return Some([id; 4]),
-        };
-        let p = PAGE as usize;
-        let ids = &f.id[i..i + p + 2];
-        Some([ids[0], ids[1], ids[p], ids[p + 1]])
+        Some(f.quad(s, (cy * PAGE + cx) as usize))
     }
 
     /// Whether the map is paged ([`LightMap::build_pages`]): a page not drawn is then
@@ -1072,7 +1196,7 @@ impl LightMap {
     pub fn id_at(&self, level: u8, face: u8, ix: u32, iy: u32) -> u32 {
         match self.texel(level, face, ix, iy) {
             Ok((f, Stored::At(i))) => f.id[i],
-            Ok((_, Stored::Solid(id))) => id,
+            Ok((_, Stored::Id(id))) => id,
             Err(e) => e,
         }
     }
@@ -1081,11 +1205,16 @@ impl LightMap {
     #[inline]
     pub fn prefetch(&self, level: u8, face: u8, ix: u32, iy: u32) {
         #[cfg(target_arch = "x86_64")]
-        if let Ok((f, Stored::At(i))) = self.texel(level, face, ix, iy) {
+        if ix < self.resolution_at(level)
+            && iy < self.resolution_at(level)
+            && let Some(f) = self.face_at(level, face)
+            && let Some(s) = f.slot(ix / PAGE, iy / PAGE)
+            && let Some(p) = f.texel_ptr(s, ((iy % PAGE) * PAGE + ix % PAGE) as usize)
+        {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             // SAFETY: prefetching has no effect on memory or on the program's state; SSE is
             // part of x86-64.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>((&f.id[i] as *const u32).cast()) };
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = (level, face, ix, iy);
@@ -2059,6 +2188,46 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A page's ids are kept as one id, a palette of up to 256 ids with an index per texel,
+    /// or four bytes a texel beyond that, and read back as they were.
+    #[test]
+    fn a_page_keeps_its_ids_in_the_least_storage() {
+        let read = |kept: &PageIds, ids: &[u32]| match kept {
+            PageIds::One(id) => assert!(ids.iter().all(|t| t == id)),
+            PageIds::Palette(palette, index) => {
+                assert!(palette.len() <= 256);
+                assert!(ids.iter().zip(index.iter()).all(|(&t, &i)| palette[usize::from(i)] == t));
+            }
+            PageIds::Ids => {}
+        };
+        for distinct in [1usize, 2, 16, 255, 256, 257, 1024] {
+            // Runs of ids, the last ones repeating earlier ones: the palette's search by
+            // hashing meets ids again after other ids.
+            let ids: Vec<u32> =
+                (0..PAGE_TEXELS).map(|k| ((k * distinct / PAGE_TEXELS) * 7919 % 100_003) as u32).collect();
+            let ids: Vec<u32> =
+                ids.iter().zip(ids.iter().rev()).map(|(&a, &b)| if a % 3 == 0 { b } else { a }).collect();
+            let n = {
+                let mut v = ids.clone();
+                v.sort_unstable();
+                v.dedup();
+                v.len()
+            };
+            let kept = PageIds::of(&ids);
+            match n {
+                1 => assert!(matches!(kept, PageIds::One(_)), "{n}"),
+                2..=256 => assert!(matches!(kept, PageIds::Palette(..)), "{n}"),
+                _ => assert!(matches!(kept, PageIds::Ids), "{n}"),
+            }
+            read(&kept, &ids);
+        }
+        // EMPTY and ids next to MIXED are ids like any other.
+        let ids: Vec<u32> = (0..PAGE_TEXELS).map(|k| if k % 5 == 0 { EMPTY } else { ABSENT - 1 }).collect();
+        let kept = PageIds::of(&ids);
+        assert!(matches!(kept, PageIds::Palette(ref p, _) if p.len() == 2));
+        read(&kept, &ids);
     }
 
     #[test]

@@ -249,6 +249,11 @@ fn fmt_db(p: Option<f64>) -> String {
     }
 }
 
+/// Median milliseconds of pass `k` (0 for a pass the configuration does not run).
+fn pass_ms(m: &Measurement, k: &str) -> f64 {
+    m.pass_ms.get(k).copied().unwrap_or(0.0)
+}
+
 fn fps(m: &Measurement) -> f64 {
     m.frame_ms.fps_mean()
 }
@@ -305,7 +310,7 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     );
     for r in results {
         let (x, y) = (r.get("rt"), r.get("rt-raster"));
-        let vis = |m: &Measurement| m.pass_ms.get("visibility").copied().unwrap_or(0.0);
+        let vis = |m: &Measurement| pass_ms(m, "visibility");
         let th = r.thesis.map_or("-".into(), |t| format!("{} / {}", t.t41.0, t.t41.1));
         let tr = r.thesis.map_or("-".into(), |t| format!("{} / {}", n(t.t41.2), n(t.t41.3)));
         t.row(vec![
@@ -400,13 +405,13 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         ],
         1,
     );
-    // CPU time of a pass per unit (the indirect pass per (point, VPL) pair, ...): wall time
-    // times the threads.
+    // CPU ns of a pass per unit it counts (the indirect pass per (point, VPL) pair, ...): wall
+    // time times the threads.
     let threads = rayon::current_num_threads() as f64;
-    let per_pair = |ms: f64, pairs: u64| if pairs == 0 { 0.0 } else { ms * 1e6 * threads / pairs as f64 };
+    let per_unit = |ms: f64, units: u64| if units == 0 { 0.0 } else { ms * 1e6 * threads / units as f64 };
     for r in results {
         let (e, f) = (r.get("rt-vpl"), r.get("vpl-maps"));
-        let ind = |m: &Measurement| m.pass_ms.get("indirect").copied().unwrap_or(0.0);
+        let ind = |m: &Measurement| pass_ms(m, "indirect");
         let t = r.thesis.and_then(|t| t.t44);
         t4.row(vec![
             r.scene.clone(),
@@ -421,7 +426,7 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             format!("{:.1} / {:.1}", ind(e), ind(f)),
             ratio(ind(e), ind(f)),
             n(f.vpl_pairs),
-            format!("{:.1} / {:.2}", per_pair(ind(e), e.vpl_pairs), per_pair(ind(f), f.vpl_pairs)),
+            format!("{:.1} / {:.2}", per_unit(ind(e), e.vpl_pairs), per_unit(ind(f), f.vpl_pairs)),
             format!("{:.0}", f.map_build_ms),
             format!("{:.1}", f.map_bytes as f64 / 1e6),
         ]);
@@ -452,19 +457,18 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     );
     for r in results {
         let (b, c) = (r.get("rt-raster"), r.get("smerts-cube"));
-        let pass = |m: &Measurement, k: &str| m.pass_ms.get(k).copied().unwrap_or(0.0);
         tu.row(vec![
             r.scene.clone(),
             n(c.map_decisions),
-            format!("{:.1}", per_pair(pass(c, "classify"), c.map_decisions)),
+            format!("{:.1}", per_unit(pass_ms(c, "classify"), c.map_decisions)),
             n(c.rays.shadow),
-            format!("{:.0}", per_pair(pass(c, "shadow_rays"), c.rays.shadow)),
+            format!("{:.0}", per_unit(pass_ms(c, "shadow_rays"), c.rays.shadow)),
             n(b.rays.shadow),
-            format!("{:.0}", per_pair(pass(b, "direct"), b.rays.shadow)),
+            format!("{:.0}", per_unit(pass_ms(b, "direct"), b.rays.shadow)),
             format!(
                 "{:.0} / {:.0}",
-                per_pair(pass(b, "specular"), b.rays.specular),
-                per_pair(pass(c, "specular"), c.rays.specular)
+                per_unit(pass_ms(b, "specular"), b.rays.specular),
+                per_unit(pass_ms(c, "specular"), c.rays.specular)
             ),
         ]);
     }

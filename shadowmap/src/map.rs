@@ -293,6 +293,17 @@ enum Stored {
     Id(u32),
 }
 
+/// How a paged map's slot keeps its page's ids.
+#[derive(Clone, Copy, Debug)]
+enum Kept {
+    /// Every texel holds this id (most pages: a wall, a floor, the sky); nothing is stored.
+    One(u32),
+    /// Texel `t`'s id is `palette[at + index[page * PAGE_TEXELS + t]]`, of a palette `len` long.
+    Palette { at: u32, len: u16, page: u32 },
+    /// Texel `t`'s id is `id[page * PAGE_TEXELS + t]`.
+    Ids { page: u32 },
+}
+
 /// How a drawn page's ids are kept ([`PageIds::of`]).
 enum PageIds {
     /// Every texel holds this id.
@@ -352,19 +363,14 @@ struct Face {
     dense: Vec<u32>,
     /// The same for large faces.
     sparse: rustc_hash::FxHashMap<u32, u32>,
-    /// Per stored page, [`PAGE_TEXELS`] ids, row-major: slot `s`'s at page `start[s]` (at
-    /// `s` when `start` is empty, as in whole maps).
+    /// Per page stored four bytes a texel, [`PAGE_TEXELS`] ids, row-major.
     id: Vec<u32>,
-    /// Paged maps: per slot, the one id every texel of the page holds, or [`MIXED`] where the
-    /// page's texels are stored (in `id`, from page `start[s]`). Most pages hold one triangle
-    /// or none (a wall, a floor, the sky), and store nothing then. Empty in whole maps.
-    solid: Vec<u32>,
-    /// Paged maps: per slot, where its palette starts in `palette` ([`NO_PAGE`] if it has
-    /// none); a palette page's indices are page `start[s]` of `index`.
-    pal: Vec<u32>,
+    /// Paged maps: per slot, how its ids are kept ([`Kept`]). Empty in whole maps, whose slot
+    /// `s` is page `s` of `id`.
+    kept: Vec<Kept>,
+    /// The palettes of [`Kept::Palette`] slots, and their texels' indices, a page after another.
     palette: Vec<u32>,
     index: Vec<u8>,
-    start: Vec<u32>,
     /// Per slot, the rasterizer's reversed-Z depths `near / w` (0 where empty), row-major:
     /// distances are made from them only when asked for ([`LightMap::depth_at`]), which the
     /// classifier does only for planes seen edge-on. Empty in a paged map (a ray decides those
@@ -431,16 +437,22 @@ impl Face {
         Some(self.texel_of(s, ((y % PAGE) * PAGE + x % PAGE) as usize))
     }
 
+    /// How slot `s` keeps its ids.
+    #[inline]
+    fn kept(&self, s: usize) -> Kept {
+        self.kept.get(s).copied().unwrap_or(Kept::Ids { page: s as u32 })
+    }
+
     /// Texel `t` (row-major in the page) of slot `s`.
     #[inline]
     fn texel_of(&self, s: usize, t: usize) -> Stored {
-        match (self.solid.get(s), self.pal.get(s)) {
-            (Some(&id), _) if id != MIXED => Stored::Id(id),
-            (_, Some(&p)) if p != NO_PAGE => {
-                let i = self.index[self.page_start(s) * PAGE_TEXELS + t];
-                Stored::Id(self.palette[p as usize + usize::from(i)])
+        match self.kept(s) {
+            Kept::One(id) => Stored::Id(id),
+            Kept::Palette { at, page, .. } => {
+                let i = self.index[page as usize * PAGE_TEXELS + t];
+                Stored::Id(self.palette[at as usize + usize::from(i)])
             }
-            _ => Stored::At(self.page_start(s) * PAGE_TEXELS + t),
+            Kept::Ids { page } => Stored::At(page as usize * PAGE_TEXELS + t),
         }
     }
 
@@ -448,12 +460,14 @@ impl Face {
     /// in a page of one id), for a prefetch: computed without loading it.
     #[inline]
     fn texel_ptr(&self, s: usize, t: usize) -> Option<*const i8> {
-        match (self.solid.get(s), self.pal.get(s)) {
-            (Some(&id), _) if id != MIXED => None,
-            (_, Some(&p)) if p != NO_PAGE => {
-                self.index.get(self.page_start(s) * PAGE_TEXELS + t).map(|b| (b as *const u8).cast())
+        match self.kept(s) {
+            Kept::One(_) => None,
+            Kept::Palette { page, .. } => {
+                self.index.get(page as usize * PAGE_TEXELS + t).map(|b| (b as *const u8).cast())
             }
-            _ => self.id.get(self.page_start(s) * PAGE_TEXELS + t).map(|v| (v as *const u32).cast()),
+            Kept::Ids { page } => {
+                self.id.get(page as usize * PAGE_TEXELS + t).map(|v| (v as *const u32).cast())
+            }
         }
     }
 
@@ -461,72 +475,62 @@ impl Face {
     #[inline]
     fn quad(&self, s: usize, t: usize) -> [u32; 4] {
         let p = PAGE as usize;
-        if let (Some(&MIXED), Some(&at)) = (self.solid.get(s), self.pal.get(s))
-            && at != NO_PAGE
-        {
-            let i = self.page_start(s) * PAGE_TEXELS + t;
-            let (index, palette) = (&self.index[i..i + p + 2], &self.palette[at as usize..]);
-            let id = |k: usize| palette[usize::from(index[k])];
-            return [id(0), id(1), id(p), id(p + 1)];
+        match self.kept(s) {
+            Kept::One(id) => [id; 4],
+            Kept::Palette { at, page, .. } => {
+                let i = page as usize * PAGE_TEXELS + t;
+                let (index, palette) = (&self.index[i..i + p + 2], &self.palette[at as usize..]);
+                let id = |k: usize| palette[usize::from(index[k])];
+                [id(0), id(1), id(p), id(p + 1)]
+            }
+            Kept::Ids { page } => {
+                let i = page as usize * PAGE_TEXELS + t;
+                let ids = &self.id[i..i + p + 2];
+                [ids[0], ids[1], ids[p], ids[p + 1]]
+            }
         }
-        if let Stored::At(i) = self.texel_of(s, t) {
-            let ids = &self.id[i..i + p + 2];
-            return [ids[0], ids[1], ids[p], ids[p + 1]];
-        }
-        [t, t + 1, t + p, t + p + 1].map(|u| match self.texel_of(s, u) {
-            Stored::Id(id) => id,
-            Stored::At(i) => self.id[i],
-        })
     }
 
-    /// Appends a page's storage for its next slot (the slot itself is inserted by the caller).
+    /// Appends a page's ids for its next slot (the slot itself is inserted by the caller):
+    /// `stored` holds a [`PageIds::Ids`] page's texels.
     fn push_ids(&mut self, ids: PageIds, stored: &[u32]) {
-        match ids {
-            PageIds::One(id) => {
-                self.solid.push(id);
-                self.pal.push(NO_PAGE);
-                self.start.push(0);
-            }
-            PageIds::Palette(palette, index) => {
-                self.solid.push(MIXED);
-                self.pal.push(self.palette.len() as u32);
-                self.start.push((self.index.len() / PAGE_TEXELS) as u32);
-                self.palette.extend_from_slice(&palette);
-                self.index.extend_from_slice(&index[..]);
-            }
-            PageIds::Ids => {
-                self.solid.push(MIXED);
-                self.pal.push(NO_PAGE);
-                self.start.push((self.id.len() / PAGE_TEXELS) as u32);
-                self.id.extend_from_slice(stored);
-            }
-        }
+        let kept = match ids {
+            PageIds::One(id) => Kept::One(id),
+            PageIds::Palette(palette, index) => self.push_palette(&palette, &index[..]),
+            PageIds::Ids => self.push_stored(stored),
+        };
+        self.kept.push(kept);
     }
 
-    /// The page of `id` where slot `s`'s texels are stored (not a solid page).
-    #[inline]
-    fn page_start(&self, s: usize) -> usize {
-        self.start.get(s).map_or(s, |&p| p as usize)
+    fn push_palette(&mut self, palette: &[u32], index: &[u8]) -> Kept {
+        let (at, page) = (self.palette.len() as u32, (self.index.len() / PAGE_TEXELS) as u32);
+        self.palette.extend_from_slice(palette);
+        self.index.extend_from_slice(index);
+        Kept::Palette { at, len: palette.len() as u16, page }
+    }
+
+    fn push_stored(&mut self, ids: &[u32]) -> Kept {
+        let page = (self.id.len() / PAGE_TEXELS) as u32;
+        self.id.extend_from_slice(ids);
+        Kept::Ids { page }
     }
 
     /// Appends slot `s` of `from` (a paged face) as page `(px, py)`: its ids (as `from` keeps
     /// them) and its region summaries.
     fn push_page(&mut self, from: &Face, s: usize, (px, py): (u32, u32), groups: bool) {
         self.insert(px, py);
-        let ids = match (from.solid.get(s), from.pal.get(s)) {
-            (Some(&id), _) if id != MIXED => PageIds::One(id),
-            (_, Some(&p)) if p != NO_PAGE => {
-                let i = from.page_start(s) * PAGE_TEXELS;
-                let index: Box<[u8; PAGE_TEXELS]> =
-                    Box::new(from.index[i..i + PAGE_TEXELS].try_into().expect("a page of indices"));
-                let n = usize::from(index.iter().copied().max().unwrap_or(0)) + 1;
-                PageIds::Palette(from.palette[p as usize..p as usize + n].to_vec(), index)
+        let kept = match from.kept(s) {
+            Kept::One(id) => Kept::One(id),
+            Kept::Palette { at, len, page } => {
+                let (at, i) = (at as usize, page as usize * PAGE_TEXELS);
+                self.push_palette(&from.palette[at..at + usize::from(len)], &from.index[i..i + PAGE_TEXELS])
             }
-            _ => PageIds::Ids,
+            Kept::Ids { page } => {
+                let i = page as usize * PAGE_TEXELS;
+                self.push_stored(&from.id[i..i + PAGE_TEXELS])
+            }
         };
-        let i = from.page_start(s) * PAGE_TEXELS;
-        let stored = if matches!(ids, PageIds::Ids) { &from.id[i..i + PAGE_TEXELS] } else { &[][..] };
-        self.push_ids(ids, stored);
+        self.kept.push(kept);
         self.region.extend_from_slice(&from.region[s * PAGE_REGIONS..][..PAGE_REGIONS]);
         if groups {
             self.region_group.extend_from_slice(&from.region_group[s * PAGE_REGIONS..][..PAGE_REGIONS]);
@@ -537,20 +541,15 @@ impl Face {
     /// bytes a texel packed in slot order. `id` holds every slot's texels in slot order
     /// before, only those of [`PageIds::Ids`] pages written (the others never mapped in).
     fn pack_pages(&mut self, kept: Vec<PageIds>) {
-        let all = std::mem::take(&mut self.id);
-        let (slots, mut stored) = (kept.len(), 0);
-        self.solid = Vec::with_capacity(slots);
-        self.pal = Vec::with_capacity(slots);
-        self.start = Vec::with_capacity(slots);
-        let mut id = all;
+        let mut id = std::mem::take(&mut self.id);
+        let mut stored = 0;
+        self.kept = Vec::with_capacity(kept.len());
         for (s, ids) in kept.into_iter().enumerate() {
             if matches!(ids, PageIds::Ids) {
                 if stored != s {
                     id.copy_within(s * PAGE_TEXELS..(s + 1) * PAGE_TEXELS, stored * PAGE_TEXELS);
                 }
-                self.solid.push(MIXED);
-                self.pal.push(NO_PAGE);
-                self.start.push(stored as u32);
+                self.kept.push(Kept::Ids { page: stored as u32 });
                 stored += 1;
             } else {
                 self.push_ids(ids, &[]);
@@ -584,11 +583,9 @@ impl Face {
             return 0;
         }
         self.index.len()
+            + self.kept.len() * std::mem::size_of::<Kept>()
             + (self.id.len()
-                + self.solid.len()
-                + self.pal.len()
                 + self.palette.len()
-                + self.start.len()
                 + self.depth.len()
                 + self.region.len()
                 + self.region_group.len()

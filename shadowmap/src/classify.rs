@@ -265,9 +265,7 @@ impl Classifier<'_> {
     }
 
     /// Where `p` falls in the map: the first half of [`Classifier::classify`], for callers that
-    /// locate a batch of points first and [`Classifier::prefetch`] their texels, so that the
-    /// cache misses of the batch overlap instead of stalling one point at a time (a 2048^2 face
-    /// is 16 MB; at most resolutions nearly every point's texels are a new cache line).
+    /// pick the level themselves ([`Classifier::locate_at`]) or keep the location.
     #[inline]
     pub fn locate(&self, p: Vec3) -> MapCoord {
         self.map.coord(p - self.map.light())
@@ -278,19 +276,6 @@ impl Classifier<'_> {
     #[inline]
     pub fn locate_at(&self, p: Vec3, level: u8) -> MapCoord {
         self.map.coord_at(p - self.map.light(), level)
-    }
-
-    /// Starts loading the texels around `c` into the cache. A hint only.
-    #[inline]
-    pub fn prefetch(&self, c: MapCoord) {
-        let last = self.map.resolution_at(c.level).saturating_sub(1);
-        let (x, y) = ((c.x.max(0.0) as u32).min(last), (c.y.max(0.0) as u32).min(last));
-        // The 2x2 footprint spans at most two block rows; the texel's own block and the one
-        // below or above it cover most footprints.
-        let y2 = if c.y - f64::from(y) >= 0.5 { (y + 1).min(last) } else { y.saturating_sub(1) };
-        for yy in [y, y2] {
-            self.map.prefetch(c.level, c.face, x, yy);
-        }
     }
 
     /// What [`Classifier::classify`] decides for every point in the convex hull of `corners`

@@ -456,21 +456,6 @@ impl Face {
         }
     }
 
-    /// Where texel `t` of slot `s` is read from (its index in a palette page; nothing to read
-    /// in a page of one id), for a prefetch: computed without loading it.
-    #[inline]
-    fn texel_ptr(&self, s: usize, t: usize) -> Option<*const i8> {
-        match self.kept(s) {
-            Kept::One(_) => None,
-            Kept::Palette { page, .. } => {
-                self.index.get(page as usize * PAGE_TEXELS + t).map(|b| (b as *const u8).cast())
-            }
-            Kept::Ids { page } => {
-                self.id.get(page as usize * PAGE_TEXELS + t).map(|v| (v as *const u32).cast())
-            }
-        }
-    }
-
     /// The ids of the 2x2 texels from texel `t` of slot `s` (all four in the page).
     #[inline]
     fn quad(&self, s: usize, t: usize) -> [u32; 4] {
@@ -1196,25 +1181,6 @@ impl LightMap {
             Ok((_, Stored::Id(id))) => id,
             Err(e) => e,
         }
-    }
-
-    /// Starts loading texel `(ix, iy)` into the cache. A hint only.
-    #[inline]
-    pub fn prefetch(&self, level: u8, face: u8, ix: u32, iy: u32) {
-        #[cfg(target_arch = "x86_64")]
-        if ix < self.resolution_at(level)
-            && iy < self.resolution_at(level)
-            && let Some(f) = self.face_at(level, face)
-            && let Some(s) = f.slot(ix / PAGE, iy / PAGE)
-            && let Some(p) = f.texel_ptr(s, ((iy % PAGE) * PAGE + ix % PAGE) as usize)
-        {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            // SAFETY: prefetching has no effect on memory or on the program's state; SSE is
-            // part of x86-64.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = (level, face, ix, iy);
     }
 
     /// The one triangle that the texels `[x0, x1] x [y0, y1]` of `face` at `level` see:

@@ -5,20 +5,21 @@
 //!
 //! ```text
 //! map_build    light maps: only faces some camera hit falls on; cached until the scene changes
-//! classify     8x8 tile by tile: the shading points, then per light each point's location (its
-//!              texels prefetched for the whole tile) and map decision -> faces, lit, edge (the
-//!              2x2 texel footprint disagrees); then the tile's direct light from those decisions
+//! classify     8x8 tile by tile: the shading points, then per light each point's location and
+//!              map decision -> faces, lit, edge (the 2x2 texel footprint disagrees; its occluder
+//!              hint kept); then the tile's direct light from those decisions
 //! borders      (Smerts) und = dilate(edge and/or laplacian(lit, faces), R), byte ops over 8 lights
 //! shadow_rays  the undecided (pixel, light) pairs listed light by light, in screen order: a
-//!              shadow ray each (hint first, the hint looked up again), in fixed chunks; the
+//!              shadow ray each (the hint classify kept first), in fixed chunks; the
 //!              answers into lit, and the direct light of those pixels again
 //! ```
 //!
 //! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points
 //! in L1 while every light decides them; the alternative, a screen-sized buffer per light and a
-//! pass per buffer, spent its time writing and reading those buffers. The occluder hint is not
-//! stored: only border pairs need it, and reading it again from the map's texels
-//! ([`Classifier::hint_at`]) costs less than a `u32` per pixel and light.
+//! pass per buffer, spent its time writing and reading those buffers. The occluder hint is kept
+//! for the map-space border pairs alone, as a list per light in pixel order: the only pairs that
+//! need it, and looking the point up in the map again cost each border ray more than the
+//! list's search.
 //!
 //! With `Shadows::Maps` the map's decision is final (no borders, no rays): the pure shadow-map
 //! baseline. Mirror hits have no screen neighbours: they use the map-space test alone
@@ -334,6 +335,24 @@ pub struct Shadowing<'r> {
     map_counts: Vec<[u64; 3]>,
     /// Per light, the pairs of [`Shadowing::add_ray_pixels`] (rays alone decide them).
     added: Vec<u64>,
+    /// Per light, the pixels of the map-space borders (in pixel order) and their occluder
+    /// hints ([`Lookup::hint`]), as the classify pass found them: a border ray tests that
+    /// triangle first without looking the point up again.
+    hints: Vec<Vec<BorderHint>>,
+}
+
+/// A map-space border pair's pixel and the occluder hint its map lookup found.
+#[derive(Clone, Copy, Debug)]
+struct BorderHint {
+    pixel: u32,
+    hint: u32,
+}
+
+/// What one band of rows of the classify pass found: per light, its map decisions (lit,
+/// shadowed, and how many of those per tile) and its map-space borders, in pixel order.
+struct BandOut {
+    counts: Vec<[u64; 3]>,
+    hints: Vec<Vec<BorderHint>>,
 }
 
 impl Shadowing<'_> {
@@ -837,9 +856,13 @@ impl Renderer<'_> {
             let first = b * band;
             let rows = out.len() / w.max(1);
             let mut counts = vec![[0u64; 3]; nl];
+            // Per light, the band's map-space borders and their occluder hints.
+            let mut hints: Vec<Vec<BorderHint>> = vec![Vec::new(); nl];
             // Per tile: the shading points and the lights they face, then per light every
-            // point's location (prefetching its texels, so that the tile's cache misses
-            // overlap) and decision, then the points' direct light from those decisions.
+            // point's location and decision, then the points' direct light from those
+            // decisions. (Prefetching the located points' texels before deciding them measured
+            // slower once pages were compact: the page-table walk it repeats costs more than
+            // the misses it hides.)
             let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
             // Per point of the tile, its receiver factor and (per light in turn) its level.
             let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
@@ -904,12 +927,11 @@ impl Renderer<'_> {
                         }
                         continue;
                     }
+                    // Located first, then decided: two loops measured faster than one.
                     located.clear();
                     for (k, (j, s)) in tile.iter().enumerate() {
                         if faces[j * stride + byte] & bit != 0 {
-                            let m = c.locate_at(s.p, levels[k]);
-                            c.prefetch(m);
-                            located.push((k, m));
+                            located.push((k, c.locate_at(s.p, levels[k])));
                         }
                     }
                     for &(k, m) in &located {
@@ -921,6 +943,7 @@ impl Renderer<'_> {
                         counts[l][usize::from(lk.decision != Decision::Lit)] += 1;
                         if lk.map_border {
                             edge[j * stride + byte] |= bit;
+                            hints[l].push(BorderHint { pixel: (first + j) as u32, hint: lk.hint });
                         }
                     }
                 }
@@ -932,9 +955,10 @@ impl Renderer<'_> {
                 }
             }
             (0..rows).for_each(|_| progress());
-            counts
+            hints.iter_mut().for_each(|h| h.sort_unstable_by_key(|e| e.pixel));
+            BandOut { counts, hints }
         };
-        let counts: Vec<Vec<[u64; 3]>> = match points {
+        let bands: Vec<BandOut> = match points {
             Some(p) => bands
                 .zip(p.par_chunks_mut(band))
                 .enumerate()
@@ -942,7 +966,10 @@ impl Renderer<'_> {
                 .collect(),
             None => bands.enumerate().map(|(b, x)| band_fn(b, x, None)).collect(),
         };
-        let map_counts = sum_per_light(counts, nl);
+        // The bands' lists in band order: each light's in pixel order.
+        let hints =
+            (0..nl).map(|l| bands.iter().flat_map(|b| b.hints[l].iter().copied()).collect()).collect();
+        let map_counts = sum_per_light(bands.into_iter().map(|b| b.counts).collect(), nl);
         stats.record(super::Pass::Classify, t);
 
         let t = Instant::now();
@@ -969,7 +996,7 @@ impl Renderer<'_> {
             })
             .collect();
         let added = vec![0; nl];
-        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added }
+        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, hints }
     }
 
     /// The borders pass: the (pixel, light) pairs that a shadow ray decides, `bufs.und`, from
@@ -1191,7 +1218,13 @@ impl Shadowing<'_> {
                     .iter()
                     .map(|&(l, k)| {
                         let (l, s) = (l as usize, &points[k as usize]);
-                        let hint = hint(&cls[l], &self.resolution, l, s, r);
+                        let i = pixels[k as usize];
+                        let hint = match self.hints[l].binary_search_by_key(&i, |e| e.pixel) {
+                            Ok(at) => self.hints[l][at].hint,
+                            // Undecided by the Laplacian, the dilation or no map: no lookup
+                            // was kept; the map's texels give a cheaper hint.
+                            Err(_) => hint(&cls[l], &self.resolution, l, s, r),
+                        };
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);

@@ -108,18 +108,25 @@ impl PlaneSides {
 /// already know that the light faces the point (a map decision was made for it) use this alone.
 #[inline]
 pub fn light_geometry(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32, f32)> {
-    // A dark light adds nothing: no ray, no map (the plan says so).
-    if light.intensity.max_element() <= 0.0 {
-        return None;
-    }
+    light_geometry_and_terms(hit, light).0
+}
+
+/// [`light_geometry`], and the point's [`LightTerms`] with its geometric normal (its map level's
+/// terms), from one offset to the light and one square root.
+#[inline]
+fn light_geometry_and_terms(hit: &SurfaceHit, light: &PointLight) -> (Option<(Vec3, f32, f32)>, LightTerms) {
     let to_light = light.position - hit.p;
     let d2 = to_light.length_squared();
-    if d2 == 0.0 {
-        return None;
+    // `LightTerms::of`, with `length()` as `length_squared().sqrt()`.
+    let r = d2.sqrt();
+    let terms = LightTerms { r, cos_light: hit.ng.dot(to_light).abs() / r };
+    // A dark light adds nothing: no ray, no map (the plan says so).
+    if light.intensity.max_element() <= 0.0 || d2 == 0.0 {
+        return (None, terms);
     }
-    let wi = to_light / d2.sqrt();
+    let wi = to_light / r;
     let cos = hit.ns.dot(wi);
-    (cos > 0.0).then_some((wi, cos, d2))
+    ((cos > 0.0).then_some((wi, cos, d2)), terms)
 }
 
 /// Per-renderer state of map-based shadows: the light maps and the per-pixel buffers, recycled
@@ -831,9 +838,8 @@ impl Renderer<'_> {
         // The level of a point for light `l` (its receiver factor `recv`): its page level for
         // paged maps, 0 otherwise.
         let receiver = |s: &SurfaceHit| resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
-        let level = |l: usize, recv: f32, s: &SurfaceHit| {
-            resolution.get(l).map_or(0, |r| r.level_for(recv, s.p, s.ng, lights[l].position))
-        };
+        let level =
+            |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0, |r| r.level_from(recv, t));
         stats.record(super::Pass::MapBuild, t);
         stats.maps_built = built;
         stats.decisions.extend(decisions);
@@ -868,10 +874,16 @@ impl Renderer<'_> {
             let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
             let mut levels: Vec<u8> = Vec::with_capacity(TILE * TILE);
             let mut located = Vec::with_capacity(TILE * TILE);
+            // Per point of the tile and light, `light_geometry`.
+            let mut geo: Vec<Option<(Vec3, f32, f32)>> = Vec::with_capacity(TILE * TILE * nl);
+            // Per point of the tile and light, its level's `LightTerms`.
+            let mut terms: Vec<LightTerms> = Vec::with_capacity(TILE * TILE * nl);
             let mut sides = PlaneSides::new();
             for x0 in (0..w).step_by(TILE) {
                 tile.clear();
                 recv.clear();
+                geo.clear();
+                terms.clear();
                 let x1 = (x0 + TILE).min(w);
                 for y in 0..rows {
                     for j in y * w + x0..y * w + x1 {
@@ -885,11 +897,21 @@ impl Renderer<'_> {
                         let tri = &self.scene.positions[s.tri as usize];
                         let sd = sides.of(s.tri, tri, lights);
                         let bits = &mut faces[j * stride..][..stride];
+                        // `facing`, with the plane sides and the winding reused; the light's
+                        // geometry kept for the shading below.
+                        let winding = s.ng.dot((tri[1] - tri[0]).cross(tri[2] - tri[0]));
                         for (l, light) in lights.iter().enumerate() {
-                            // `facing`, with the plane side reused.
-                            if light_geometry(&s, light).is_some() && viewer_side(&s, tri, sd[l]) {
+                            let (g, t) = light_geometry_and_terms(&s, light);
+                            terms.push(t);
+                            let viewer = match sd[l] {
+                                PlaneSide::In => false,
+                                PlaneSide::Front => winding > 0.0,
+                                PlaneSide::Back => winding < 0.0,
+                            };
+                            if g.is_some() && viewer {
                                 bits[l / 8] |= 1 << (l % 8);
                             }
+                            geo.push(g);
                         }
                         recv.push(receiver(&s));
                         tile.push((j, s));
@@ -907,7 +929,7 @@ impl Renderer<'_> {
                 for (l, c) in cls.iter().enumerate() {
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
                     levels.clear();
-                    levels.extend(tile.iter().zip(&recv).map(|((_, s), &f)| level(l, f, s)));
+                    levels.extend(recv.iter().enumerate().map(|(k, &f)| level(l, f, terms[k * nl + l])));
                     let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
                         let own = tile[0].1.tri;
                         // The tile test reads one level: the finest its points need (each
@@ -947,11 +969,10 @@ impl Renderer<'_> {
                         }
                     }
                 }
-                for (j, s) in &tile {
+                for (k, (j, s)) in tile.iter().enumerate() {
                     let lb = &lit[j * stride..][..stride];
-                    out[*j] = super::direct::reflect(self, s, |l, light| {
-                        if bit(lb, l) { light_geometry(s, light) } else { None }
-                    });
+                    let g = &geo[k * nl..][..nl];
+                    out[*j] = super::direct::reflect(self, s, |l, _| if bit(lb, l) { g[l] } else { None });
                 }
             }
             (0..rows).for_each(|_| progress());

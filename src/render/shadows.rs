@@ -70,11 +70,23 @@ pub fn facing(hit: &SurfaceHit, light: &PointLight, tri: &[Vec3; 3]) -> Option<(
 /// viewer.
 #[inline]
 pub fn viewer_side(hit: &SurfaceHit, tri: &[Vec3; 3], side: PlaneSide) -> bool {
-    let winding = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    on_viewer_side(seen_winding(hit, tri), side)
+}
+
+/// `hit.ng . winding` of `tri`: its sign says which side of the plane `hit` is seen from, for
+/// [`on_viewer_side`] (one per hit, for all lights).
+#[inline]
+fn seen_winding(hit: &SurfaceHit, tri: &[Vec3; 3]) -> f32 {
+    hit.ng.dot((tri[1] - tri[0]).cross(tri[2] - tri[0]))
+}
+
+/// [`viewer_side`] from the hit's [`seen_winding`].
+#[inline]
+fn on_viewer_side(seen: f32, side: PlaneSide) -> bool {
     match side {
         PlaneSide::In => false,
-        PlaneSide::Front => hit.ng.dot(winding) > 0.0,
-        PlaneSide::Back => hit.ng.dot(winding) < 0.0,
+        PlaneSide::Front => seen > 0.0,
+        PlaneSide::Back => seen < 0.0,
     }
 }
 
@@ -899,16 +911,11 @@ impl Renderer<'_> {
                         let bits = &mut faces[j * stride..][..stride];
                         // `facing`, with the plane sides and the winding reused; the light's
                         // geometry kept for the shading below.
-                        let winding = s.ng.dot((tri[1] - tri[0]).cross(tri[2] - tri[0]));
+                        let seen = seen_winding(&s, tri);
                         for (l, light) in lights.iter().enumerate() {
                             let (g, t) = light_geometry_and_terms(&s, light);
                             terms.push(t);
-                            let viewer = match sd[l] {
-                                PlaneSide::In => false,
-                                PlaneSide::Front => winding > 0.0,
-                                PlaneSide::Back => winding < 0.0,
-                            };
-                            if g.is_some() && viewer {
+                            if g.is_some() && on_viewer_side(seen, sd[l]) {
                                 bits[l / 8] |= 1 << (l % 8);
                             }
                             geo.push(g);

@@ -57,7 +57,8 @@ fn pixel_rays_sum_to_the_frame_counts() {
 /// The per-light ray outcome: every undecided pixel cast one ray, answered by the hint or by a
 /// traversal, and their totals are the frame's hint hits and traversals (no mirrors: camera
 /// hits only); the border before dilation lies inside the undecided pixels, and equals them
-/// without dilation. The cached maps drew the faces the stats report.
+/// without dilation. The cached maps drew the faces the stats report. A map-space border's ray
+/// that its hint answered tested the hint the inspector shows (the classify pass's lookup).
 #[test]
 fn shadow_ray_outcomes_and_borders_match_the_stats() {
     let s = scene(0);
@@ -77,6 +78,15 @@ fn shadow_ray_outcomes_and_borders_match_the_stats() {
                     k != RAY_NONE,
                     b.undecided[l][i] && b.occ[l][i] != hyrt_shadowmap::classify::Decision::NotNeeded
                 );
+            }
+            for (i, &k) in rays.iter().enumerate() {
+                if k == RAY_HINT && b.map_border[l][i] {
+                    assert_ne!(
+                        b.hint[l][i],
+                        hyrt_shadowmap::EMPTY,
+                        "light {l} pixel {i}: answered by no hint"
+                    );
+                }
             }
             hints += rays.iter().filter(|&&k| k == RAY_HINT).count() as u64;
             traversals += rays.iter().filter(|&&k| k == RAY_TRAVERSAL).count() as u64;

@@ -146,7 +146,13 @@ impl LightTerms {
     #[inline]
     pub fn of(p: Vec3, n: Vec3, light: Vec3) -> Self {
         let v = light - p;
-        let r = v.length();
+        Self::of_offset(n, v, v.length())
+    }
+
+    /// [`LightTerms::of`] from the receiver's offset `v = light - p` and its length `r`, for
+    /// callers that have them already.
+    #[inline]
+    pub fn of_offset(n: Vec3, v: Vec3, r: f32) -> Self {
         Self { r, cos_light: n.dot(v).abs() / r }
     }
 }

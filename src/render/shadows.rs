@@ -129,9 +129,9 @@ pub fn light_geometry(hit: &SurfaceHit, light: &PointLight) -> Option<(Vec3, f32
 fn light_geometry_and_terms(hit: &SurfaceHit, light: &PointLight) -> (Option<(Vec3, f32, f32)>, LightTerms) {
     let to_light = light.position - hit.p;
     let d2 = to_light.length_squared();
-    // `LightTerms::of`, with `length()` as `length_squared().sqrt()`.
+    // `length()` is `length_squared().sqrt()`: the terms are `LightTerms::of`'s.
     let r = d2.sqrt();
-    let terms = LightTerms { r, cos_light: hit.ng.dot(to_light).abs() / r };
+    let terms = LightTerms::of_offset(hit.ng, to_light, r);
     // A dark light adds nothing: no ray, no map (the plan says so).
     if light.intensity.max_element() <= 0.0 || d2 == 0.0 {
         return (None, terms);

@@ -1177,7 +1177,8 @@ fn lookup(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit,
     cls.classify_at(s.p, s.tri, locate(cls, resolution, l, s, r))
 }
 
-/// The occluder a border ray from `s` to light `l` tests first ([`Classifier::hint_at`]), at
+/// The occluder a border ray from `s` to light `l` tests first when classify kept no hint for
+/// its pair (undecided by the Laplacian, the dilation or no map): [`Classifier::hint_at`], at
 /// the point's level.
 fn hint(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit, r: &Renderer) -> u32 {
     cls.hint_at(s.tri, locate(cls, resolution, l, s, r))

@@ -1733,6 +1733,13 @@ type NdcBounds = ((f64, f64), (f64, f64), bool);
 /// One page's storage: ids, and region summaries by triangle and by group.
 type PageSlot<'a> = (&'a mut [u32], &'a mut [u32], &'a mut [u32]);
 
+/// A cube face that a cluster of triangles may reach, for [`bin_pages`]: its axes
+/// ([`CubeFace::axes`]) and its groups with a marked page under the cluster's image.
+struct LiveFace<'g> {
+    axes: (usize, f32, usize, usize),
+    groups: Vec<&'g PageGroup>,
+}
+
 /// The marked pages of one level of one face, for [`bin_pages`].
 struct PageGroup {
     level: u8,
@@ -1747,9 +1754,26 @@ struct PageGroup {
     sparse: rustc_hash::FxHashMap<(u32, u32), u32>,
     /// The pages, by `(x, y, index)`.
     list: Vec<(u32, u32, u32)>,
+    /// With `dense`: the marked pages' summed-area table over the rectangle, `(w + 1) x (h +
+    /// 1)`, entry `(x, y)` counting the pages left of `x` and above `y`.
+    counts: Vec<u32>,
 }
 
 impl PageGroup {
+    /// Whether a marked page lies in pages `[x0, x1] x [y0, y1]` (within the rectangle): from
+    /// the summed-area table, four loads; `true` without one (a large, sparse group).
+    #[inline]
+    fn any_in(&self, x0: u32, x1: u32, y0: u32, y1: u32) -> bool {
+        if self.counts.is_empty() {
+            return true;
+        }
+        let w = (self.x1 - self.x0 + 2) as usize;
+        let (a, b) = ((x0 - self.x0) as usize, (x1 - self.x0 + 1) as usize);
+        let (c, d) = ((y0 - self.y0) as usize, (y1 - self.y0 + 1) as usize);
+        let at = |x: usize, y: usize| self.counts[y * w + x];
+        at(b, d) + at(a, c) != at(a, d) + at(b, c)
+    }
+
     #[inline]
     fn index(&self, x: u32, y: u32) -> Option<u32> {
         if self.dense.is_empty() {
@@ -1789,12 +1813,31 @@ fn bin_pages(
         let (y0, y1) =
             (list.iter().map(|p| p.1).min().unwrap_or(0), list.iter().map(|p| p.1).max().unwrap_or(0));
         let area = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
-        let mut g = PageGroup { level, x0, y0, x1, y1, dense: Vec::new(), sparse: Default::default(), list };
+        let mut g = PageGroup {
+            level,
+            x0,
+            y0,
+            x1,
+            y1,
+            dense: Vec::new(),
+            sparse: Default::default(),
+            list,
+            counts: Vec::new(),
+        };
         if area <= 1 << 16 {
             g.dense = vec![u32::MAX; area as usize];
             let w = x1 - x0 + 1;
             for &(x, y, i) in &g.list {
                 g.dense[((y - y0) * w + (x - x0)) as usize] = i;
+            }
+            let (w, h) = (w as usize, (y1 - y0 + 1) as usize);
+            g.counts = vec![0; (w + 1) * (h + 1)];
+            for y in 0..h {
+                let mut row = 0;
+                for x in 0..w {
+                    row += u32::from(g.dense[y * w + x] != u32::MAX);
+                    g.counts[(y + 1) * (w + 1) + x + 1] = g.counts[y * (w + 1) + x + 1] + row;
+                }
             }
         } else {
             g.sparse = g.list.iter().map(|&(x, y, i)| ((x, y), i)).collect();
@@ -1858,17 +1901,21 @@ fn bin_pages(
                     if i & 4 == 0 { bmin.z } else { bmax.z },
                 )
             });
-            let live: Vec<(usize, (usize, f32, usize, usize))> = axes
+            // Per face, the groups with a marked page under the cluster's image.
+            let live: Vec<LiveFace> = axes
                 .iter()
                 .copied()
-                .filter(|&(f, ax)| {
+                .filter_map(|(f, ax)| {
                     let v = corners.map(|d| clip(d, ax));
-                    project(&v).is_some_and(|(lo, hi, behind)| {
-                        faces[f].iter().any(|g| {
+                    let (lo, hi, behind) = project(&v)?;
+                    let groups: Vec<&PageGroup> = faces[f]
+                        .iter()
+                        .filter(|g| {
                             let (x0, x1, y0, y1) = range(g, lo, hi, behind);
-                            x0 <= x1 && y0 <= y1
+                            x0 <= x1 && y0 <= y1 && g.any_in(x0, x1, y0, y1)
                         })
-                    })
+                        .collect();
+                    (!groups.is_empty()).then_some(LiveFace { axes: ax, groups })
                 })
                 .collect();
             if live.is_empty() {
@@ -1879,7 +1926,7 @@ fn bin_pages(
                 // The exact offsets, for the bounds of the image (f32's would be a texel off at
                 // the finest levels, and would need a margin that culls nothing there).
                 let e = tris[id as usize].map(|p| p.as_dvec3() - l);
-                for &(f, ax) in &live {
+                for &LiveFace { axes: ax, ref groups } in &live {
                     let v = d.map(|d| clip(d, ax));
                     if beyond_face(&v, near) {
                         continue;
@@ -1887,7 +1934,7 @@ fn bin_pages(
                     let behind = v.iter().any(|c| c.w <= 0.0);
                     let (lo, hi) = image_bounds(&e, ax);
                     let image = ImageBox::of(lo, hi);
-                    for g in &faces[f] {
+                    for &g in groups {
                         let (x0, x1, y0, y1) = if behind {
                             (g.x0, g.x1, g.y0, g.y1)
                         } else {
@@ -1898,7 +1945,7 @@ fn bin_pages(
                                 None => continue,
                             }
                         };
-                        if x0 > x1 || y0 > y1 {
+                        if x0 > x1 || y0 > y1 || !g.any_in(x0, x1, y0, y1) {
                             continue;
                         }
                         let span = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);

@@ -1760,6 +1760,45 @@ struct PageGroup {
 }
 
 impl PageGroup {
+    /// The group of `list`'s pages (`(x, y, index)`, distinct) at `level`.
+    fn new(level: u8, list: Vec<(u32, u32, u32)>) -> Self {
+        let (x0, x1) =
+            (list.iter().map(|p| p.0).min().unwrap_or(0), list.iter().map(|p| p.0).max().unwrap_or(0));
+        let (y0, y1) =
+            (list.iter().map(|p| p.1).min().unwrap_or(0), list.iter().map(|p| p.1).max().unwrap_or(0));
+        let area = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
+        let mut g = PageGroup {
+            level,
+            x0,
+            y0,
+            x1,
+            y1,
+            dense: Vec::new(),
+            sparse: Default::default(),
+            list,
+            counts: Vec::new(),
+        };
+        if area <= 1 << 16 {
+            g.dense = vec![u32::MAX; area as usize];
+            let w = x1 - x0 + 1;
+            for &(x, y, i) in &g.list {
+                g.dense[((y - y0) * w + (x - x0)) as usize] = i;
+            }
+            let (w, h) = (w as usize, (y1 - y0 + 1) as usize);
+            g.counts = vec![0; (w + 1) * (h + 1)];
+            for y in 0..h {
+                let mut row = 0;
+                for x in 0..w {
+                    row += u32::from(g.dense[y * w + x] != u32::MAX);
+                    g.counts[(y + 1) * (w + 1) + x + 1] = g.counts[y * (w + 1) + x + 1] + row;
+                }
+            }
+        } else {
+            g.sparse = g.list.iter().map(|&(x, y, i)| ((x, y), i)).collect();
+        }
+        g
+    }
+
     /// Whether a marked page lies in pages `[x0, x1] x [y0, y1]` (within the rectangle): from
     /// the summed-area table, four loads; `true` without one (a large, sparse group).
     #[inline]
@@ -1808,41 +1847,7 @@ fn bin_pages(
         let (level, face) = (pages[start].level, pages[start].face);
         let end = start + pages[start..].iter().take_while(|k| (k.level, k.face) == (level, face)).count();
         let list: Vec<(u32, u32, u32)> = (start..end).map(|i| (pages[i].px, pages[i].py, i as u32)).collect();
-        let (x0, x1) =
-            (list.iter().map(|p| p.0).min().unwrap_or(0), list.iter().map(|p| p.0).max().unwrap_or(0));
-        let (y0, y1) =
-            (list.iter().map(|p| p.1).min().unwrap_or(0), list.iter().map(|p| p.1).max().unwrap_or(0));
-        let area = u64::from(x1 - x0 + 1) * u64::from(y1 - y0 + 1);
-        let mut g = PageGroup {
-            level,
-            x0,
-            y0,
-            x1,
-            y1,
-            dense: Vec::new(),
-            sparse: Default::default(),
-            list,
-            counts: Vec::new(),
-        };
-        if area <= 1 << 16 {
-            g.dense = vec![u32::MAX; area as usize];
-            let w = x1 - x0 + 1;
-            for &(x, y, i) in &g.list {
-                g.dense[((y - y0) * w + (x - x0)) as usize] = i;
-            }
-            let (w, h) = (w as usize, (y1 - y0 + 1) as usize);
-            g.counts = vec![0; (w + 1) * (h + 1)];
-            for y in 0..h {
-                let mut row = 0;
-                for x in 0..w {
-                    row += u32::from(g.dense[y * w + x] != u32::MAX);
-                    g.counts[(y + 1) * (w + 1) + x + 1] = g.counts[y * (w + 1) + x + 1] + row;
-                }
-            }
-        } else {
-            g.sparse = g.list.iter().map(|&(x, y, i)| ((x, y), i)).collect();
-        }
-        faces[usize::from(face)].push(g);
+        faces[usize::from(face)].push(PageGroup::new(level, list));
         start = end;
     }
     let axes: Vec<(usize, (usize, f32, usize, usize))> =
@@ -2202,6 +2207,54 @@ mod tests {
 
     /// A page's ids are kept as one id, a palette of up to 256 ids with an index per texel,
     /// or four bytes a texel beyond that, and read back as they were.
+    #[test]
+    fn a_page_group_knows_which_rectangles_hold_a_marked_page() {
+        // Pseudo-random page sets on small grids, every rectangle against a brute-force scan.
+        let mut seed = 0x9e37_79b9_u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        for case in 0..40 {
+            let (w, h) = (1 + next() % 9, 1 + next() % 7);
+            let (ox, oy) = (next() % 50, next() % 50);
+            let mut list: Vec<(u32, u32, u32)> = Vec::new();
+            for y in 0..h {
+                for x in 0..w {
+                    if next() % 4 == 0 || (case % 5 == 0 && x == w / 2) {
+                        list.push((ox + x, oy + y, list.len() as u32));
+                    }
+                }
+            }
+            if list.is_empty() {
+                list.push((ox, oy, 0));
+            }
+            let g = PageGroup::new(3, list.clone());
+            assert!(!g.counts.is_empty());
+            for y0 in g.y0..=g.y1 {
+                for y1 in y0..=g.y1 {
+                    for x0 in g.x0..=g.x1 {
+                        for x1 in x0..=g.x1 {
+                            let brute = list
+                                .iter()
+                                .any(|&(x, y, _)| (x0..=x1).contains(&x) && (y0..=y1).contains(&y));
+                            assert_eq!(
+                                g.any_in(x0, x1, y0, y1),
+                                brute,
+                                "case {case}: [{x0}, {x1}] x [{y0}, {y1}]"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        // A group too large for a dense grid cannot tell, and says so.
+        let g = PageGroup::new(10, vec![(0, 0, 0), (1000, 1000, 1)]);
+        assert!(g.counts.is_empty() && g.any_in(5, 6, 5, 6));
+    }
+
     #[test]
     fn a_page_keeps_its_ids_in_the_least_storage() {
         let read = |kept: &PageIds, ids: &[u32]| match kept {

@@ -1600,7 +1600,10 @@ fn usable(t: &[Vec3; 3], l: DVec3) -> Option<f64> {
     }
     // f32 - f32 in f64 is exact unless the exponents differ by more than 29.
     let d = t.map(|v| v.as_dvec3() - l);
-    let far = d.iter().map(|x| x.length()).fold(0.0, f64::max);
+    // The farthest and nearest vertex's distances, one square root each: `length()` is
+    // `length_squared().sqrt()`, and a correctly rounded square root keeps the order.
+    let d2 = d.map(|x| x.length_squared());
+    let far = d2.iter().copied().fold(0.0, f64::max).sqrt();
     if far.is_nan() || far > MAX_DISTANCE {
         return None;
     }
@@ -1615,7 +1618,7 @@ fn usable(t: &[Vec3; 3], l: DVec3) -> Option<f64> {
     // The distance to the triangle is at most the nearest vertex's: when `h` clears the
     // threshold with that distance, it clears it with the exact one, which is then not needed
     // (it is for few triangles, and it is the costly part of this test).
-    let near_vertex = d.iter().map(|x| x.length()).fold(f64::INFINITY, f64::min);
+    let near_vertex = d2.iter().copied().fold(f64::INFINITY, f64::min).sqrt();
     let rel = 2f64.powi(-20);
     let edge_on_rel = |h: f64| h > near_vertex * rel || h > dist_triangle(d[0], d[1], d[2]) * rel;
     (h > edge_on_abs && edge_on_rel(h)).then_some(far)

@@ -1257,7 +1257,7 @@ impl Shadowing<'_> {
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
-                        r.pixel_rays.add(pixels[k as usize] as usize, &before, &c);
+                        r.pixel_rays.add(i as usize, &before, &c);
                         (blocked, c.shadow_hint_hits > hits)
                     })
                     .collect();

@@ -414,6 +414,9 @@ impl Shadowing<'_> {
 /// Side of the square pixel tiles of the classify pass: its shading points stay in L1 while
 /// every light decides them, and neighbouring pixels look up neighbouring texels.
 const TILE: usize = 8;
+/// Half a [`TILE`]: the side of the quarters whose points the tile test decides at once when the
+/// whole tile's cannot.
+const H: usize = TILE / 2;
 
 /// Rays per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up in the same
 /// order for any thread count.
@@ -933,33 +936,63 @@ impl Renderer<'_> {
                     let k = tile.len() - 1;
                     [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
                 });
+                // A full tile that is not on one plane may still have quarters that are: each
+                // quarter's corners, for the quarters on one plane (a tile's row-major points).
+                let full = tile.len() == TILE * TILE;
+                let quarter = |q: usize, i: usize| (q / 2 * H + i / H) * TILE + q % 2 * H + i % H;
+                let quarters: [Option<[Vec3; 4]>; 4] = std::array::from_fn(|q| {
+                    let on_one = |g| (0..H * H).all(|i| group(&tile[quarter(q, i)].1) == g);
+                    (full && !one_plane && on_one(group(&tile[quarter(q, 0)].1)))
+                        .then(|| [0, H - 1, H * H - H, H * H - 1].map(|i| tile[quarter(q, i)].1.p))
+                });
                 for (l, c) in cls.iter().enumerate() {
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
                     levels.clear();
                     levels.extend(recv.iter().enumerate().map(|(k, &f)| level(l, f, terms[k * nl + l])));
-                    let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
-                        let own = tile[0].1.tri;
-                        // The tile test reads one level: the finest its points need (each
-                        // point then gets texels at least as fine as its own level's; where
-                        // that level's pages do not cover the tile, the test cannot tell).
-                        let finest = levels.iter().copied().max().unwrap_or(0);
-                        c.hull(k, own, shared[own as usize].then(|| group(&tile[0].1)), finest)
-                    });
-                    if hull != Hull::Unknown {
+                    // The tile test reads one level: the finest its points need (each point then
+                    // gets texels at least as fine as its own level's; where that level's pages
+                    // do not cover the tile, the test cannot tell).
+                    let hull_of = |k: &[Vec3; 4], first: usize, finest: u8| {
+                        let own = tile[first].1.tri;
+                        c.hull(k, own, shared[own as usize].then(|| group(&tile[first].1)), finest)
+                    };
+                    let decide_all = |hull: Hull,
+                                      points: &mut dyn Iterator<Item = usize>,
+                                      lit: &mut [u8],
+                                      counts: &mut [u64; 3]| {
                         let lit_all = hull == Hull::Lit;
-                        for (j, _) in &tile {
+                        for k in points {
+                            let j = tile[k].0;
                             if faces[j * stride + byte] & bit != 0 {
                                 lit[j * stride + byte] |= if lit_all { bit } else { 0 };
-                                counts[l][usize::from(!lit_all)] += 1;
-                                counts[l][2] += 1;
+                                counts[usize::from(!lit_all)] += 1;
+                                counts[2] += 1;
                             }
                         }
+                    };
+                    let hull = corners
+                        .as_ref()
+                        .map_or(Hull::Unknown, |k| hull_of(k, 0, levels.iter().copied().max().unwrap_or(0)));
+                    if hull != Hull::Unknown {
+                        decide_all(hull, &mut (0..tile.len()), lit, &mut counts[l]);
                         continue;
+                    }
+                    // The points no quarter's test decided, a bit per point of the tile.
+                    const _: () = assert!(TILE * TILE <= 64);
+                    let mut undecided = u64::MAX;
+                    for (q, k) in quarters.iter().enumerate() {
+                        let Some(k) = k else { continue };
+                        let finest = (0..H * H).map(|i| levels[quarter(q, i)]).max().unwrap_or(0);
+                        let hull = hull_of(k, quarter(q, 0), finest);
+                        if hull != Hull::Unknown {
+                            decide_all(hull, &mut (0..H * H).map(|i| quarter(q, i)), lit, &mut counts[l]);
+                            (0..H * H).for_each(|i| undecided &= !(1u64 << quarter(q, i)));
+                        }
                     }
                     // Located first, then decided: two loops measured faster than one.
                     located.clear();
                     for (k, (j, s)) in tile.iter().enumerate() {
-                        if faces[j * stride + byte] & bit != 0 {
+                        if faces[j * stride + byte] & bit != 0 && undecided >> k & 1 != 0 {
                             located.push((k, c.locate_at(s.p, levels[k])));
                         }
                     }

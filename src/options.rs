@@ -105,6 +105,22 @@ choice! {
 }
 
 choice! {
+    /// How a (point, light) pair is decided whose map footprint is a border only because of
+    /// occluders within the bias band (a neighbouring triangle's plane past a crease, or a
+    /// contact shadow): see `hyrt_shadowmap::classify::Lookup::suspects`.
+    #[derive(Default)]
+    pub enum Ambiguous {
+        /// A whole shadow ray (a border pair, as the thesis's SMeRTS).
+        #[default]
+        Rays = "rays",
+        /// Those one or two triangles tested with the point's shadow ray alone (no traversal):
+        /// most such pairs are lit, and a traversal to prove it costs what a handful of
+        /// decisions do; what it misses is an occluder that no texel of the footprint holds.
+        Triangles = "triangles",
+    }
+}
+
+choice! {
     /// How shadows are decided at mirror hits (which have no screen neighbours).
     #[derive(Default)]
     pub enum MirrorShadows {
@@ -268,6 +284,7 @@ pub struct ShadowOptions {
     /// Border dilation radius in pixels.
     pub dilate: u32,
     pub mirror: MirrorShadows,
+    pub ambiguous: Ambiguous,
 }
 
 impl Default for ShadowOptions {
@@ -284,6 +301,7 @@ impl Default for ShadowOptions {
             borders: Borders::MapSpace,
             dilate: 0,
             mirror: MirrorShadows::default(),
+            ambiguous: Ambiguous::default(),
         }
     }
 }
@@ -530,6 +548,13 @@ pub const KNOBS: &[Knob] = &[
         shadow.map.tess_texels
     ),
     knob!(
+        "ambiguous",
+        "MODE",
+        "SMeRTS: a pair whose map footprint is a border only because an occluder lies within the bias band (a crease, a contact): `rays` casts the whole shadow ray, `triangles` tests those triangles alone with it (fewer rays, a little less accurate: occluders the map missed stay missed).",
+        choice Ambiguous,
+        shadow.ambiguous
+    ),
+    knob!(
         "mirror-shadows",
         "MODE",
         "Shadows at mirror hits: from the `maps` (map-space border test) or by `rays`.",
@@ -663,6 +688,7 @@ mod tests {
         check::<Shadows>();
         check::<Borders>();
         check::<MirrorShadows>();
+        check::<Ambiguous>();
         check::<Indirect>();
         check::<Preset>();
         check::<MapKind>();

@@ -281,6 +281,39 @@ fn smerts_on_conference() {
     thesis_scene("conference.toml");
 }
 
+/// `--ambiguous triangles`: the pairs whose footprint is a border only because of occluders
+/// within the bias band are decided by testing those triangles alone with their shadow ray.
+/// They are exactly border pairs of `--ambiguous rays` (the two modes' undecided and settled
+/// pairs add up to the same borders), they spare their rays, and the image keeps the thesis
+/// scenes' bounds against the reference.
+#[test]
+fn ambiguous_borders_settled_by_their_triangles() {
+    let mut s = hyrt::scene::load(root().join("scenes/cornell-bunny-mirror.toml").to_str().unwrap()).unwrap();
+    (s.settings.width, s.settings.height) = (320, 240);
+    let reference = render(&s, Options::reference());
+    let mut opts = Options::hybrid();
+    opts.check_visibility = true;
+    let rays = render(&s, opts);
+    opts.shadow.ambiguous = hyrt::render::Ambiguous::Triangles;
+    let tris = render(&s, opts);
+    let sum = |f: &Frame, g: fn(&LightStats) -> u64| f.stats.lights.iter().map(g).sum::<u64>();
+    let settled = sum(&tris, |l| l.by_suspects);
+    assert_eq!(sum(&rays, |l| l.by_suspects), 0);
+    assert!(settled > 0, "{:?}", tris.stats.lights);
+    assert_eq!(sum(&tris, |l| l.undecided) + settled, sum(&rays, |l| l.undecided));
+    assert_eq!(decided(&tris), decided(&rays));
+    // Each settled pair spares its ray (the mirror hits' settled pairs too).
+    assert!(
+        tris.stats.rays.shadow + settled <= rays.stats.rays.shadow,
+        "{:?} {:?}",
+        tris.stats.rays,
+        rays.stats.rays
+    );
+    let pixels = 320.0 * 240.0;
+    assert!(wrong(&tris) as f64 <= 0.0005 * pixels, "{} wrong", wrong(&tris));
+    assert!(psnr(&reference, &tris, s.settings.exposure) >= 45.0);
+}
+
 /// Maps are built once per scene: the second frame builds none, and gives the same bytes.
 /// Faces that no camera hit falls on are not drawn: a light above a floor needs no upward face.
 #[test]

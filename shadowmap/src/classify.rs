@@ -219,6 +219,14 @@ pub struct Lookup {
     /// then [`Decision::Shadow`] and `map_border` is set): a neighbouring triangle's plane past a crease,
     /// or a contact shadow. Lookups without rays may prefer to call it lit.
     pub ambiguous: bool,
+    /// When the footprint is a border only because of occluders within the bias band (no
+    /// texel decided shadow, and one or two distinct triangles were ambiguous): those
+    /// triangles, else [`EMPTY`]. The map cannot tell whether they block the point (a
+    /// neighbouring triangle's plane past a crease, or a contact), but the point's own shadow
+    /// ray can, by testing them alone: blocked if it meets one, lit otherwise, which is the
+    /// ray's answer unless an occluder no texel of the footprint holds blocks it (what
+    /// resolution buys, as for every map decision).
+    pub suspects: [u32; 2],
     /// Face and texel of the decision (for inspection).
     pub face: u8,
     pub texel: [u32; 2],
@@ -530,6 +538,7 @@ impl Classifier<'_> {
                 hint: EMPTY,
                 map_border: true,
                 ambiguous: false,
+                suspects: [EMPTY; 2],
                 face: c.face,
                 texel,
             };
@@ -543,6 +552,7 @@ impl Classifier<'_> {
                 hint: EMPTY,
                 map_border: false,
                 ambiguous: false,
+                suspects: [EMPTY; 2],
                 face: c.face,
                 texel,
             };
@@ -591,7 +601,11 @@ impl Classifier<'_> {
         // can tell), and is a border.
         let decision = if d == LIT { Decision::Lit } else { Decision::Shadow };
         let mut map_border = d == AMBIGUOUS || !in_domain;
-        if !map_border {
+        // The ambiguous triangles (up to two; a third, or a texel deciding shadow, leaves
+        // none), for `suspects`.
+        let (mut amb, mut na) = ([centre, EMPTY], usize::from(d == AMBIGUOUS));
+        let mut settles = d != SHADOW && in_domain;
+        if in_domain && (!map_border || settles) {
             // Most footprints see one or two triangles: decide each once.
             let (mut seen, mut n) = ([centre, EMPTY, EMPTY, EMPTY], 1);
             for (&id, &xy) in foot_ids.iter().zip(&foot) {
@@ -605,9 +619,18 @@ impl Classifier<'_> {
                 if d != LIT && hint == EMPTY {
                     hint = id;
                 }
+                settles &= d != SHADOW;
+                if d == AMBIGUOUS {
+                    settles &= na < 2;
+                    if na < 2 {
+                        amb[na] = id;
+                        na += 1;
+                    }
+                }
             }
         }
-        Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, face: c.face, texel }
+        let suspects = if map_border && settles && na > 0 { [amb[0], amb[1]] } else { [EMPTY; 2] };
+        Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, suspects, face: c.face, texel }
     }
 }
 

@@ -39,7 +39,7 @@ pub use surface::SurfaceHit;
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
 
 pub use crate::options::{
-    Borders, Indirect, LightMaps, MirrorShadows, Options, ShadowOptions, Shadows, Visibility,
+    Ambiguous, Borders, Indirect, LightMaps, MirrorShadows, Options, ShadowOptions, Shadows, Visibility,
 };
 
 /// Per-frame statistics.

@@ -40,7 +40,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::gather::ShadePoint;
-use super::{Borders, FrameStats, LightMaps, MirrorShadows, Renderer, Shadows, SurfaceHit};
+use super::{Ambiguous, Borders, FrameStats, LightMaps, MirrorShadows, Renderer, Shadows, SurfaceHit};
 
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
@@ -224,6 +224,10 @@ pub struct LightStats {
     /// Of `lit` and `shadowed`, the hits decided with the rest of their 8x8 tile at once, from
     /// the map region under the tile's corners (`Classifier::hull`), not point by point.
     pub by_tile: u64,
+    /// Of `lit` and `shadowed`, the hits whose footprint was a border only because of
+    /// occluders within the bias band, decided by testing those triangles alone with the
+    /// hit's shadow ray (`Ambiguous::Triangles`; `Lookup::suspects`), not by a whole ray.
+    pub by_suspects: u64,
     /// Map faces drawn for this light (cube: of 6, paraboloid: of 2).
     pub faces_drawn: u32,
     /// Paged maps: the pages this frame's camera hits read, those of them drawn for this
@@ -351,7 +355,7 @@ pub struct Shadowing<'r> {
     resolution: Vec<Resolution>,
     /// Per light, the map's lit and shadowed decisions (before the border rays), and how many
     /// of them were made per tile.
-    map_counts: Vec<[u64; 3]>,
+    map_counts: Vec<[u64; 4]>,
     /// Per light, the pairs of [`Shadowing::add_ray_pixels`] (rays alone decide them).
     added: Vec<u64>,
     /// Per light, the pixels of the map-space borders (in pixel order) and their occluder
@@ -370,7 +374,7 @@ struct BorderHint {
 /// What one band of rows of the classify pass found: per light, its map decisions (lit,
 /// shadowed, and how many of those per tile) and its map-space borders, in pixel order.
 struct BandOut {
-    counts: Vec<[u64; 3]>,
+    counts: Vec<[u64; 4]>,
     hints: Vec<Vec<BorderHint>>,
 }
 
@@ -876,7 +880,7 @@ impl Renderer<'_> {
         let band_fn = |b: usize, (((out, faces), lit), edge): Band, mut pts: Option<&mut [ShadePoint]>| {
             let first = b * band;
             let rows = out.len() / w.max(1);
-            let mut counts = vec![[0u64; 3]; nl];
+            let mut counts = vec![[0u64; 4]; nl];
             // Per light, the band's map-space borders and their occluder hints.
             let mut hints: Vec<Vec<BorderHint>> = vec![Vec::new(); nl];
             // Per tile: the shading points and the lights they face, then per light every
@@ -959,7 +963,7 @@ impl Renderer<'_> {
                     let decide_all = |hull: Hull,
                                       points: &mut dyn Iterator<Item = usize>,
                                       lit: &mut [u8],
-                                      counts: &mut [u64; 3]| {
+                                      counts: &mut [u64; 4]| {
                         let lit_all = hull == Hull::Lit;
                         for k in points {
                             let j = tile[k].0;
@@ -999,11 +1003,14 @@ impl Renderer<'_> {
                     for &(k, m) in &located {
                         let (j, s) = &tile[k];
                         let lk = c.classify_at(s.p, s.tri, m);
-                        if lk.decision == Decision::Lit {
+                        let settled = settle(self, &lk, s, lights[l].position);
+                        let is_lit = settled.unwrap_or(lk.decision == Decision::Lit);
+                        if is_lit {
                             lit[j * stride + byte] |= bit;
                         }
-                        counts[l][usize::from(lk.decision != Decision::Lit)] += 1;
-                        if lk.map_border {
+                        counts[l][usize::from(!is_lit)] += 1;
+                        counts[l][3] += u64::from(settled.is_some());
+                        if lk.map_border && settled.is_none() {
                             edge[j * stride + byte] |= bit;
                             hints[l].push(BorderHint { pixel: (first + j) as u32, hint: lk.hint });
                         }
@@ -1200,6 +1207,22 @@ fn sum_per_light<const K: usize>(parts: Vec<Vec<[u64; K]>>, lights: usize) -> Ve
 }
 
 /// The classifier of `map`, with the renderer's bias.
+/// Under SMeRTS with `Ambiguous::Triangles`, whether light `light` reaches `s` when its lookup
+/// `lk` names suspects ([`Lookup::suspects`]): its shadow ray, made as the reference makes it,
+/// tested against those triangles alone (with the tracer's watertight test, so that each
+/// answers as it would in a traversal): lit unless one blocks it. `None` otherwise (the map's
+/// decision stands, or a whole ray decides a border).
+fn settle(r: &Renderer, lk: &Lookup, s: &SurfaceHit, light: Vec3) -> Option<bool> {
+    if lk.suspects[0] == EMPTY
+        || r.options.shadows != Shadows::Smerts
+        || r.options.shadow.ambiguous != Ambiguous::Triangles
+    {
+        return None;
+    }
+    let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
+    Some(!lk.suspects.iter().any(|&t| t != EMPTY && r.tracer.hits_triangle(t, &ray).is_some()))
+}
+
 fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &Renderer) -> Classifier<'m> {
     Classifier { map, planes, bias: r.options.shadow.bias, point_error: r.occluders().1 }
 }
@@ -1342,6 +1365,7 @@ impl Shadowing<'_> {
             st.lit = m[0] - u[1];
             st.shadowed = m[1] - (u[0] - u[1] - a);
             st.by_tile = m[2];
+            st.by_suspects = m[3];
         }
         if check {
             self.check(r, gbuffer);
@@ -1460,6 +1484,9 @@ impl Shadowing<'_> {
             return !r.tracer.occluded(&ray(), RayKind::Shadow, counts);
         }
         let lk = self.decide(r, l, s);
+        if let Some(lit) = settle(r, &lk, s, light.position) {
+            return lit;
+        }
         if r.options.shadows == Shadows::Smerts && lk.map_border {
             return !r.tracer.occluded_with_hint(&ray(), lk.hint, counts);
         }

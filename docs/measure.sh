@@ -16,6 +16,10 @@ $H sweep scenes/office.toml --runs 5 --out docs/sweeps/office --base "--preset h
   --knob shadow-map-res=512,1024,2048 --knob tess=2,8,inf --knob dilate=0,1
 $H sweep scenes/conference.toml --runs 3 --out docs/sweeps/conference \
   --knob shadow-map-res=512,1024,2048 --knob bias=0.5,1,2 --knob borders=laplacian,depth
+# Border pairs made by ambiguity alone: whole rays or their triangles, against the bias.
+for s in cornell-bunny-mirror office conference; do
+  $H sweep scenes/$s.toml --runs 5 --out docs/sweeps/$s-ambiguous --knob ambiguous=rays,triangles --knob bias=0.5,1,2
+done
 # VPL maps, 45 VPLs, against VPL rays with the same direct light: format x resolution x filter.
 for s in cornell-bunny-mirror office conference; do
   $H sweep scenes/$s.toml --runs 3 --out docs/sweeps/$s-vpl-maps \

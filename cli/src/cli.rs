@@ -231,8 +231,12 @@ fn render(a: &RenderArgs) -> Result<()> {
             }
             _ => String::new(),
         };
+        let settled = match s.by_suspects {
+            0 => String::new(),
+            n => format!(", {n} of those settled by their ambiguous triangles"),
+        };
         say(format!(
-            "light {l}: {} lit, {} shadowed, {} undecided (rays){wrong}; {} map face(s), {} page(s) held ({} drawn), {:.1} MB",
+            "light {l}: {} lit, {} shadowed{settled}, {} undecided (rays){wrong}; {} map face(s), {} page(s) held ({} drawn), {:.1} MB",
             s.lit,
             s.shadowed,
             s.undecided,

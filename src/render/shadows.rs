@@ -354,7 +354,7 @@ pub struct Shadowing<'r> {
     /// Paged maps: per light, how a point picks its level (empty for whole maps).
     resolution: Vec<Resolution>,
     /// Per light, the map's lit and shadowed decisions (before the border rays), and how many
-    /// of them were made per tile.
+    /// of them were made per tile, and by their ambiguous triangles ([`settle`]).
     map_counts: Vec<[u64; 4]>,
     /// Per light, the pairs of [`Shadowing::add_ray_pixels`] (rays alone decide them).
     added: Vec<u64>,
@@ -372,7 +372,8 @@ struct BorderHint {
 }
 
 /// What one band of rows of the classify pass found: per light, its map decisions (lit,
-/// shadowed, and how many of those per tile) and its map-space borders, in pixel order.
+/// shadowed, and how many of those per tile and by their ambiguous triangles) and its
+/// map-space borders, in pixel order.
 struct BandOut {
     counts: Vec<[u64; 4]>,
     hints: Vec<Vec<BorderHint>>,
@@ -1206,7 +1207,6 @@ fn sum_per_light<const K: usize>(parts: Vec<Vec<[u64; K]>>, lights: usize) -> Ve
     sum
 }
 
-/// The classifier of `map`, with the renderer's bias.
 /// Under SMeRTS with `Ambiguous::Triangles`, whether light `light` reaches `s` when its lookup
 /// `lk` names suspects ([`Lookup::suspects`]): its shadow ray, made as the reference makes it,
 /// tested against those triangles alone (with the tracer's watertight test, so that each
@@ -1223,6 +1223,7 @@ fn settle(r: &Renderer, lk: &Lookup, s: &SurfaceHit, light: Vec3) -> Option<bool
     Some(!lk.suspects.iter().any(|&t| t != EMPTY && r.tracer.hits_triangle(t, &ray).is_some()))
 }
 
+/// The classifier of `map`, with the renderer's bias.
 fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &Renderer) -> Classifier<'m> {
     Classifier { map, planes, bias: r.options.shadow.bias, point_error: r.occluders().1 }
 }

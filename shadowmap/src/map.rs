@@ -589,8 +589,12 @@ impl Face {
 /// blocks at the resolutions in use.
 const REGION: u32 = 8;
 
-/// [`Face::region`]: a block that sees two or more triangles.
+/// [`Face::region`]: a block that sees two or more triangles, or a triangle and nothing.
 const MIXED: u32 = EMPTY - 1;
+
+/// A region summary before its block's first texel (never left in a summary: every block has
+/// texels).
+const UNSEEN: u32 = EMPTY - 3;
 
 /// An empty vector with room for `n` elements, in memory the kernel is asked to back with huge
 /// pages ([`advise_huge`]): for the rasterizer's target, which writes into its capacity.
@@ -632,17 +636,19 @@ fn advise_huge<T>(v: &Vec<T>) {
 fn summarise(ids: &[u32], groups: &[u32], by_id: &mut Vec<u32>, by_group: &mut Vec<u32>) {
     let (p, r) = (PAGE as usize, REGION as usize);
     let side = p / r;
-    // One id seen, EMPTY, or MIXED once a second one shows up.
+    // The one value seen (an id, or EMPTY), or MIXED once a second one shows up: a block of
+    // one triangle and empty texels is mixed, since a point whose footprint holds an empty
+    // texel decides otherwise than one under the triangle.
     let see = |v: &mut u32, id: u32| {
-        if id != EMPTY && id != *v {
-            *v = if *v == EMPTY { id } else { MIXED };
+        if id != *v {
+            *v = if *v == UNSEEN { id } else { MIXED };
         }
     };
     let first = by_id.len();
-    by_id.resize(first + side * side, EMPTY);
+    by_id.resize(first + side * side, UNSEEN);
     let gfirst = by_group.len();
     if !groups.is_empty() {
-        by_group.resize(gfirst + side * side, EMPTY);
+        by_group.resize(gfirst + side * side, UNSEEN);
     }
     for (y, row) in ids.chunks_exact(p).enumerate() {
         for (rx, run) in row.chunks_exact(r).enumerate() {
@@ -1184,8 +1190,8 @@ impl LightMap {
     }
 
     /// The one triangle that the texels `[x0, x1] x [y0, y1]` of `face` at `level` see:
-    /// `Some(EMPTY)` if none, `Some(id)` if every texel holds `id` or nothing, `None` if two
-    /// triangles or more may be seen, or a page of the box was not drawn (the answer is
+    /// `Some(EMPTY)` if none, `Some(id)` if every texel holds `id`, `None` if two triangles or
+    /// more, or a triangle and nothing, may be seen, or a page of the box was not drawn (the answer is
     /// conservative: it reads whole `REGION` blocks). A face of a whole map that was not drawn
     /// sees nothing, as its texel lookups say.
     pub fn region_id(&self, face: u8, level: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
@@ -1197,7 +1203,7 @@ impl LightMap {
     }
 
     /// [`LightMap::region_id`] by group of triangles (`Some(g)`: every texel holds a triangle
-    /// of group `g`, or nothing), for a map made by [`LightMap::build_grouped`]; `None`
+    /// of group `g`), for a map made by [`LightMap::build_grouped`]; `None`
     /// (cannot tell) for one made without groups.
     pub fn region_group(&self, face: u8, level: u8, x0: u32, y0: u32, x1: u32, y1: u32) -> Option<u32> {
         let f = self.face_at(level, face)?;
@@ -1215,20 +1221,18 @@ impl LightMap {
         let last = self.resolution_at(level) - 1;
         let side = PAGE / REGION;
         let region = if group { &f.region_group } else { &f.region };
-        let mut seen = EMPTY;
+        let mut seen = UNSEEN;
         for by in y0 / REGION..=y1.min(last) / REGION {
             for bx in x0 / REGION..=x1.min(last) / REGION {
                 let slot = f.slot(bx / side, by / side)?;
                 let v = region[slot * PAGE_REGIONS + ((by % side) * side + bx % side) as usize];
-                if v == MIXED || (v != EMPTY && seen != EMPTY && v != seen) {
+                if v == MIXED || (seen != UNSEEN && v != seen) {
                     return None;
                 }
-                if v != EMPTY {
-                    seen = v;
-                }
+                seen = v;
             }
         }
-        Some(seen)
+        Some(if seen == UNSEEN { EMPTY } else { seen })
     }
 
     /// Id of the closest triangle at texel `(ix, iy)` of `face` at level 0, or [`EMPTY`]

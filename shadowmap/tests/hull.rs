@@ -118,3 +118,60 @@ fn hull_declines_paraboloids_and_empty_input() {
     assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0, None, 0), Hull::Unknown);
     assert_eq!(cls.hull(&[], 0, None, 0), Hull::Unknown);
 }
+
+/// An occluder that hides a floor exactly, as the light sees it (the floor scaled towards the
+/// light), with nothing beyond the floor's edge: tiles at the edge read a region of the
+/// occluder's texels and empty ones. A point whose footprint holds an empty texel is a border,
+/// so the tile test may not call the tile shadowed.
+#[test]
+fn hull_over_an_occluder_and_nothing_is_no_shadow() {
+    let light = Vec3::new(0.1, 2.0, 0.05);
+    let floor = [
+        Vec3::new(-1.0, 0.0, -1.0),
+        Vec3::new(1.0, 0.0, -1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(-1.0, 0.0, 1.0),
+    ];
+    let lid = floor.map(|p| light + (p - light) * 0.5);
+    let tris = vec![
+        [floor[0], floor[1], floor[2]],
+        [floor[0], floor[2], floor[3]],
+        [lid[0], lid[1], lid[2]],
+        [lid[0], lid[2], lid[3]],
+    ];
+    let planes = triangle_planes(&tris);
+    let (mut asked, mut declined) = (0, 0);
+    for res in [64, 256, 1024] {
+        let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
+        let map = LightMap::build(&tris, light, &opts, &[true; 6]);
+        let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris) };
+        // Tiles along the floor's x = 1 edge (on triangle 0, where x > z), a few texels wide.
+        for k in 0..200 {
+            let z = -0.9 + 1.0 * k as f32 / 200.0;
+            let d = 4.0 / res as f32;
+            let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                .map(|(a, b)| Vec3::new(1.0 - d * (1.0 - a) - 1e-4, 0.0, z + d * b * 0.5));
+            asked += 1;
+            let hull = cls.hull(&corners, 0, None, 0);
+            if hull == Hull::Unknown {
+                declined += 1;
+                continue;
+            }
+            for i in 0..=8 {
+                for j in 0..=8 {
+                    let (a, b) = (i as f32 / 8.0, j as f32 / 8.0);
+                    let p = corners[0] * (1.0 - a) * (1.0 - b)
+                        + corners[1] * a * (1.0 - b)
+                        + corners[2] * (1.0 - a) * b
+                        + corners[3] * a * b;
+                    let lk = cls.classify(p, 0);
+                    assert!(
+                        (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
+                        "res {res}: {hull:?} but {p} is {lk:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(declined > 0 && asked > 0, "{declined} of {asked} declined");
+}

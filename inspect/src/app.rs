@@ -532,6 +532,9 @@ impl Inspector {
                 ui.add_enabled_ui(o.shadows == Shadows::Smerts, |ui| {
                     combo(ui, "borders", &mut sh.borders);
                     ui.add(egui::Slider::new(&mut sh.dilate, 0..=4).text("dilation (px)"));
+                    combo(ui, "ambiguous borders", &mut sh.ambiguous).on_hover_text(
+                        "Border pairs made only by occluders within the bias band: a whole shadow ray, or those triangles alone tested with it.",
+                    );
                 });
                 ui.add_enabled_ui(sh.map.kind == MapKind::Paraboloid, |ui| {
                     let mut tess = sh.map.tess_texels.is_finite();
@@ -1067,8 +1070,14 @@ impl Inspector {
                 "occ",
                 &li.occlusion,
                 format!(
-                    "light {l}: occlusion ({} lit, {} shadowed, {} by rays)",
-                    st.lit, st.shadowed, st.undecided
+                    "light {l}: occlusion ({} lit, {} shadowed{}, {} by rays)",
+                    st.lit,
+                    st.shadowed,
+                    match st.by_suspects {
+                        0 => String::new(),
+                        n => format!(" ({n} of them by their triangles)"),
+                    },
+                    st.undecided
                 ),
             ),
             ("border", &li.border, "border before dilation".to_string()),
@@ -1786,12 +1795,15 @@ fn decision_row(ui: &mut egui::Ui, run: bool, what: &str, reason: &str) {
 }
 
 /// A combo box over every value of an enum knob, by its names ([`Choice`]).
-fn combo<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
-    egui::ComboBox::from_label(label).selected_text(value.name()).show_ui(ui, |ui| {
-        for v in T::ALL {
-            ui.selectable_value(value, *v, v.name());
-        }
-    });
+fn combo<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) -> egui::Response {
+    egui::ComboBox::from_label(label)
+        .selected_text(value.name())
+        .show_ui(ui, |ui| {
+            for v in T::ALL {
+                ui.selectable_value(value, *v, v.name());
+            }
+        })
+        .response
 }
 
 fn resolution_combo(ui: &mut egui::Ui, label: &str, value: &mut u32) {

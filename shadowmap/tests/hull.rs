@@ -37,6 +37,20 @@ fn scene(rng: &mut Rng, centre: Vec3, size: f32) -> Vec<[Vec3; 3]> {
     tris
 }
 
+/// Calls `f` with the `(n + 1)^2` points of a grid over the bilinear patch of `corners` (in
+/// tile order: the corners at `(0, 0)`, `(1, 0)`, `(0, 1)`, `(1, 1)`).
+fn each_point(corners: &[Vec3; 4], n: usize, mut f: impl FnMut(Vec3)) {
+    for i in 0..=n {
+        for j in 0..=n {
+            let (a, b) = (i as f32 / n as f32, j as f32 / n as f32);
+            f(corners[0] * (1.0 - a) * (1.0 - b)
+                + corners[1] * a * (1.0 - b)
+                + corners[2] * (1.0 - a) * b
+                + corners[3] * a * b);
+        }
+    }
+}
+
 #[test]
 fn hull_decisions_are_every_points_decision_without_border() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
@@ -82,20 +96,13 @@ fn hull_decisions_are_every_points_decision_without_border() {
                     Hull::Unknown => continue,
                 }
                 straddling += usize::from(corners.iter().any(|&p| own(p) != own(corners[0])));
-                for i in 0..=16 {
-                    for j in 0..=16 {
-                        let (a, b) = (i as f32 / 16.0, j as f32 / 16.0);
-                        let p = corners[0] * (1.0 - a) * (1.0 - b)
-                            + corners[1] * a * (1.0 - b)
-                            + corners[2] * (1.0 - a) * b
-                            + corners[3] * a * b;
-                        let lk = cls.classify(p, own(p));
-                        assert!(
-                            (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
-                            "res {res}, centre {centre}: {hull:?} but {p} is {lk:?}"
-                        );
-                    }
-                }
+                each_point(&corners, 16, |p| {
+                    let lk = cls.classify(p, own(p));
+                    assert!(
+                        (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
+                        "res {res}, centre {centre}: {hull:?} but {p} is {lk:?}"
+                    );
+                });
             }
         }
     }
@@ -157,20 +164,13 @@ fn hull_over_an_occluder_and_nothing_is_no_shadow() {
                 declined += 1;
                 continue;
             }
-            for i in 0..=8 {
-                for j in 0..=8 {
-                    let (a, b) = (i as f32 / 8.0, j as f32 / 8.0);
-                    let p = corners[0] * (1.0 - a) * (1.0 - b)
-                        + corners[1] * a * (1.0 - b)
-                        + corners[2] * (1.0 - a) * b
-                        + corners[3] * a * b;
-                    let lk = cls.classify(p, 0);
-                    assert!(
-                        (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
-                        "res {res}: {hull:?} but {p} is {lk:?}"
-                    );
-                }
-            }
+            each_point(&corners, 8, |p| {
+                let lk = cls.classify(p, 0);
+                assert!(
+                    (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
+                    "res {res}: {hull:?} but {p} is {lk:?}"
+                );
+            });
         }
     }
     assert!(declined > 0 && asked > 0, "{declined} of {asked} declined");

@@ -2212,11 +2212,10 @@ mod tests {
         }
     }
 
-    /// A page's ids are kept as one id, a palette of up to 256 ids with an index per texel,
-    /// or four bytes a texel beyond that, and read back as they were.
+    /// A page group's summed-area table says whether a rectangle holds a marked page, as a
+    /// brute-force scan does (pseudo-random page sets on small grids, every rectangle).
     #[test]
     fn a_page_group_knows_which_rectangles_hold_a_marked_page() {
-        // Pseudo-random page sets on small grids, every rectangle against a brute-force scan.
         let mut seed = 0x9e37_79b9_u32;
         let mut next = || {
             seed ^= seed << 13;
@@ -2262,6 +2261,8 @@ mod tests {
         assert!(g.counts.is_empty() && g.any_in(5, 6, 5, 6));
     }
 
+    /// A page's ids are kept as one id, a palette of up to 256 ids with an index per texel,
+    /// or four bytes a texel beyond that, and read back as they were.
     #[test]
     fn a_page_keeps_its_ids_in_the_least_storage() {
         let read = |kept: &PageIds, ids: &[u32]| match kept {

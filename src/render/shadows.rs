@@ -422,6 +422,8 @@ const TILE: usize = 8;
 /// Half a [`TILE`]: the side of the quarters whose points the tile test decides at once when the
 /// whole tile's cannot.
 const H: usize = TILE / 2;
+// A tile's points are bits of a `u64` in the classify pass.
+const _: () = assert!(TILE * TILE <= 64);
 
 /// Rays per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up in the same
 /// order for any thread count.
@@ -983,7 +985,6 @@ impl Renderer<'_> {
                         continue;
                     }
                     // The points no quarter's test decided, a bit per point of the tile.
-                    const _: () = assert!(TILE * TILE <= 64);
                     let mut undecided = u64::MAX;
                     for (q, k) in quarters.iter().enumerate() {
                         let Some(k) = k else { continue };

@@ -943,13 +943,15 @@ impl Renderer<'_> {
                     let k = tile.len() - 1;
                     [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
                 });
-                // A full tile that is not on one plane may still have quarters that are: each
-                // quarter's corners, for the quarters on one plane (a tile's row-major points).
+                // A full tile that the tile test cannot decide as a whole may have quarters it
+                // can: each quarter's corners, for the quarters on one plane (a tile's row-major
+                // points). A tile on one plane tries them too: what defeats the whole tile (an
+                // occluder's edge, a neighbouring triangle) often lies under one quarter.
                 let full = tile.len() == TILE * TILE;
                 let quarter = |q: usize, i: usize| (q / 2 * H + i / H) * TILE + q % 2 * H + i % H;
                 let quarters: [Option<[Vec3; 4]>; 4] = std::array::from_fn(|q| {
                     let on_one = |g| (0..H * H).all(|i| group(&tile[quarter(q, i)].1) == g);
-                    (full && !one_plane && on_one(group(&tile[quarter(q, 0)].1)))
+                    (full && on_one(group(&tile[quarter(q, 0)].1)))
                         .then(|| [0, H - 1, H * H - H, H * H - 1].map(|i| tile[quarter(q, i)].1.p))
                 });
                 for (l, c) in cls.iter().enumerate() {

@@ -628,6 +628,126 @@ fn gltf_bad_input() {
     assert_contains(&err_text(gltf::load(Path::new("no/such.glb"))), &["no/such.glb: cannot read file"]);
 }
 
+/// [`tiny_gltf`] with cameras and `KHR_lights_punctual` lights: node 0 the triangle; node 1
+/// a parent (translated by (0, 0, 10)) of node 2, a perspective camera at (1, 2, 3) in it,
+/// turned by a quarter turn about +Y (so that it looks down -X); node 3 an orthographic
+/// camera; nodes 4-6 a point, a spot and a directional light. Camera 2 is placed by no node.
+fn gltf_with_cameras_and_lights() -> String {
+    let nodes = r#"[{"mesh": 0},
+        {"translation": [0, 0, 10], "children": [2]},
+        {"name": "cam", "camera": 0, "rotation": [0, 0.70710678, 0, 0.70710678], "translation": [1, 2, 3]},
+        {"camera": 1},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 5, 0]},
+        {"extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 2}}}]"#;
+    tiny_gltf(nodes, 4).replace(
+        r#""scenes": [{"nodes": [0, 1]}],"#,
+        r#""scenes": [{"nodes": [0, 1, 3, 4, 5, 6]}],
+  "cameras": [
+    {"name": "main", "type": "perspective", "perspective": {"yfov": 0.5, "aspectRatio": 2.0, "znear": 0.1}},
+    {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}},
+    {"name": "spare", "type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1}}],
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+    {"name": "bulb", "type": "point", "color": [1.0, 0.5, 0.25], "intensity": 683.0, "range": 2.0},
+    {"type": "spot", "intensity": 10.0, "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.5}},
+    {"type": "directional", "intensity": 3.0}]}},"#,
+    )
+}
+
+/// glTF cameras placed by their nodes (the parent's transform too) and point lights in W/sr
+/// (candela / 683, times the colour); what hyrt has no model for is skipped with a warning
+/// that names it.
+#[test]
+fn gltf_cameras_and_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = gltf_with_cameras_and_lights();
+    let m = gltf::load(&write(dir.path(), "lit.gltf", &text)).unwrap();
+    assert_eq!(m.cameras.len(), 1, "{:?}", m.cameras);
+    let c = &m.cameras[0];
+    assert_eq!(c.label, "camera 0 'main'");
+    let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    assert!(close(c.camera.eye, Vec3::new(1.0, 2.0, 13.0)), "{:?}", c.camera.eye);
+    // A quarter turn about +Y takes -Z to -X.
+    assert!(close(c.camera.forward.normalize(), Vec3::NEG_X), "{:?}", c.camera.forward);
+    assert!(close(c.camera.up.normalize(), Vec3::Y), "{:?}", c.camera.up);
+    assert!((c.camera.fov_y_deg - 0.5f32.to_degrees()).abs() < 1e-4);
+    assert_eq!(c.aspect, Some(2.0));
+    assert_eq!(m.lights.len(), 1);
+    assert_eq!(m.lights[0].position, Vec3::new(0.0, 5.0, 0.0));
+    assert!(close(m.lights[0].intensity, Vec3::new(1.0, 0.5, 0.25)), "{:?}", m.lights[0].intensity);
+    let warnings = m.warnings.join("\n");
+    for part in [
+        "camera 1 is orthographic",
+        "camera 2 'spare' is placed by no node",
+        "light 1 is a spot light",
+        "light 2 is a directional light",
+    ] {
+        assert!(warnings.contains(part), "{warnings:?} should mention {part:?}");
+    }
+    assert!(m.warnings.iter().all(|w| w.starts_with(&format!("{}", dir.path().join("lit.gltf").display()))));
+
+    // A bare file: its camera, its aspect (the width kept), its light, and an exposure for
+    // that light; `--camera` out of range names the cameras there are.
+    let p = dir.path().join("lit.gltf");
+    let s = scene::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.camera, Some(c.camera));
+    assert_eq!((s.settings.width, s.settings.height), (640, 320));
+    assert_eq!(s.lights.len(), 1);
+    assert!(s.settings.exposure > 0.0 && s.settings.exposure.is_finite() && s.settings.exposure != 1.0);
+    assert_eq!(s.warnings.len(), 4);
+    let o = scene::Overrides { camera: Some(1), ..Default::default() };
+    assert_contains(
+        &err_text(scene::load_with(p.to_str().unwrap(), o)),
+        &["lit.gltf", "no camera 1", "0: camera 0 'main'"],
+    );
+    let o = scene::Overrides { camera: Some(0), size: Some((100, 100)), ..Default::default() };
+    let s = scene::load_with(p.to_str().unwrap(), o).unwrap();
+    assert_eq!((s.settings.width, s.settings.height), (100, 100));
+
+    // Without cameras, the automatic framing; its light sits beside the file's camera
+    // otherwise, so that what the camera sees is lit.
+    let no_cam = text.replace(r#""camera": 0, "#, "");
+    let s = scene::load(write(dir.path(), "nocam.gltf", &no_cam).to_str().unwrap()).unwrap();
+    assert_ne!(s.camera, Some(c.camera));
+    assert_eq!((s.settings.width, s.settings.height), (640, 480));
+}
+
+/// A scene file's glTF mesh brings its camera (unless the file has a `[camera]`) and its
+/// lights (the file's `[[light]]`s are added), both moved by the mesh's transform; a size in
+/// `[settings]` is kept whatever the camera's aspect.
+#[test]
+fn toml_with_gltf_cameras_and_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "lit.gltf", &gltf_with_cameras_and_lights());
+    let p = write(
+        dir.path(),
+        "s.toml",
+        "[[mesh]]\npath = \"lit.gltf\"\ntranslate = [100, 0, 0]\n\n[[light]]\nposition = [0, 1, 0]\nintensity = 2\n",
+    );
+    let s = file::load(&p).unwrap();
+    let cam = s.camera.unwrap();
+    assert!((cam.eye - Vec3::new(101.0, 2.0, 13.0)).length() < 1e-4, "{:?}", cam.eye);
+    assert_eq!((s.settings.width, s.settings.height), (640, 320));
+    assert_eq!(s.lights.len(), 2);
+    assert_eq!(s.lights[0].position, Vec3::new(100.0, 5.0, 0.0));
+    assert_eq!(s.lights[1].intensity, Vec3::splat(2.0));
+    // The file's exposure stays as written (the default).
+    assert_eq!(s.settings.exposure, 1.0);
+
+    let p = write(
+        dir.path(),
+        "sized.toml",
+        "[settings]\nwidth = 300\n\n[camera]\neye = [0, 0, 50]\ntarget = [0, 0, 0]\nfov_y = 30\n\n[[mesh]]\npath = \"lit.gltf\"\n",
+    );
+    let s = file::load(&p).unwrap();
+    assert_eq!(s.camera.unwrap().eye, Vec3::new(0.0, 0.0, 50.0));
+    let o = scene::Overrides { camera: Some(0), ..Default::default() };
+    let s = scene::load_with(p.to_str().unwrap(), o).unwrap();
+    assert!((s.camera.unwrap().eye - Vec3::new(1.0, 2.0, 13.0)).length() < 1e-4);
+    assert_eq!((s.settings.width, s.settings.height), (300, 480));
+}
+
 // ---------------------------------------------------------------------------------------------
 // TOML scene files
 

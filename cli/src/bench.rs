@@ -151,7 +151,8 @@ fn bench(a: &BenchArgs) -> Result<()> {
     // Everything that can fail before hours of rendering: scenes, flags, the output folder.
     let mut loaded = Vec::new();
     for s in &scenes {
-        loaded.push(crate::cli::load_scene(s, a.size, None, None)?);
+        loaded
+            .push(crate::cli::load_scene(s, hyrt::scene::Overrides { size: a.size, ..Default::default() })?);
     }
     if let Some(n) = a.orbit {
         return crate::orbit::run(a, &loaded, n);

@@ -68,6 +68,10 @@ pub struct RenderArgs {
     /// Exposure (linear scale) for the PNG, overriding the scene's.
     #[arg(long, value_name = "E")]
     pub exposure: Option<f32>,
+    /// View through camera N of the scene's glTF files (0 is the first), instead of the
+    /// scene's camera.
+    #[arg(long, value_name = "N")]
+    pub camera: Option<usize>,
     #[command(flatten)]
     pub knobs: Knobs,
     /// Also render the ray-traced reference of the same scene (rays everywhere, the same VPLs),
@@ -121,14 +125,9 @@ pub struct CompareArgs {
 }
 
 /// Loads a scene (a built-in name, a scene file or a mesh file) with the command line's
-/// overrides of its image size, mirror depth and exposure, and validates the result.
-pub fn load_scene(
-    name: &str,
-    size: Option<(u32, u32)>,
-    max_depth: Option<u32>,
-    exposure: Option<f32>,
-) -> Result<scene::Scene> {
-    scene::load_with(name, scene::Overrides { size, max_depth, exposure })
+/// overrides of its image size, mirror depth, exposure and camera, and validates the result.
+pub fn load_scene(name: &str, o: scene::Overrides) -> Result<scene::Scene> {
+    scene::load_with(name, o)
 }
 
 /// Runs the CLI on parsed arguments.
@@ -157,7 +156,11 @@ fn render(a: &RenderArgs) -> Result<()> {
             eprintln!("{s}");
         }
     };
-    let scene = load_scene(&a.scene, a.size, a.max_depth, a.exposure)?;
+    let o = scene::Overrides { size: a.size, max_depth: a.max_depth, exposure: a.exposure, camera: a.camera };
+    let scene = load_scene(&a.scene, o)?;
+    for w in &scene.warnings {
+        say(format!("warning: {w}"));
+    }
     let png = match (&a.output, &a.exr) {
         (Some(p), _) => Some(p.clone()),
         (None, Some(_)) => None,
@@ -399,7 +402,13 @@ fn vec3_text(v: glam::Vec3) -> String {
 /// `hyrt plan`: the static plan, and with `--frames` what two frames (or the frames of an
 /// orbit) actually did.
 fn plan(a: &PlanArgs) -> Result<()> {
-    let scene = load_scene(&a.scene, a.size, a.max_depth, None)?;
+    let scene = load_scene(
+        &a.scene,
+        scene::Overrides { size: a.size, max_depth: a.max_depth, ..Default::default() },
+    )?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
     let options = a.knobs.options_for(&scene)?;
     if !a.frames {
         let plan = hyrt::plan::Plan::new(&scene, &options);

@@ -254,7 +254,8 @@ pub fn run(a: &SweepArgs) -> Result<()> {
             bail!("knob '{}' is also set in --base '{}': set it in one place only", k.name, a.base);
         }
     }
-    let scene = crate::cli::load_scene(&a.scene, a.size, None, None)?;
+    let scene =
+        crate::cli::load_scene(&a.scene, hyrt::scene::Overrides { size: a.size, ..Default::default() })?;
     let options_of = |flags: &[String]| -> Result<Options> { Knobs::from_flags(flags)?.options_for(&scene) };
     options_of(&base).map_err(|e| anyhow!("--base '{}': {}", a.base, flag_error(&e)))?;
     for k in &knobs {

@@ -225,13 +225,15 @@ fn bad_input_gives_clear_errors() {
     assert_fails(&d, &["cornell", "--exr", "no/such/dir/x.exr"], &["no/such/dir/x.exr", "does not exist"]);
 }
 
-/// A bare mesh file gets an automatic camera and light that frame it: the object fills a
-/// good part of the image and is lit.
+/// A bare mesh file without a camera gets an automatic camera and light that frame it: the
+/// object fills a good part of the image and is lit. One with a camera (the Duck's glTF) is
+/// seen through it, lit by a light beside it; `--camera` names a camera it does not have.
 #[test]
 fn bare_mesh_files_are_framed_and_lit() {
     let d = out_dir("bare_mesh");
-    for (name, mesh) in
-        [("duck", "gltf-samples/Duck/glTF-Binary/Duck.glb"), ("office", "radiance-office/office.obj")]
+    // The duck fills about a twentieth of its own camera's view.
+    for (name, mesh, share) in
+        [("duck", "gltf-samples/Duck/glTF-Binary/Duck.glb", 30), ("office", "radiance-office/office.obj", 10)]
     {
         let png = d.join(format!("{name}.png"));
         let path = shared_scene(mesh);
@@ -240,8 +242,14 @@ fn bare_mesh_files_are_framed_and_lit() {
         assert!(ok, "{name}: {err}");
         let img = hyrt::metrics::read_display_image(&png).unwrap();
         let lit = img.pixels.iter().filter(|p| p.max_element() > 0.05).count();
-        assert!(lit > img.pixels.len() / 10, "{name}: only {lit} of {} pixels lit", img.pixels.len());
+        assert!(lit > img.pixels.len() / share, "{name}: only {lit} of {} pixels lit", img.pixels.len());
     }
+    let duck = shared_scene("gltf-samples/Duck/glTF-Binary/Duck.glb");
+    let png = d.join("duck-1.png");
+    let (ok, _, err) =
+        hyrt(&["render", duck.to_str().unwrap(), "--camera", "1", "-o", png.to_str().unwrap()]);
+    assert!(!ok && err.contains("no camera 1") && err.contains("0: camera 0"), "{err}");
+    assert!(!png.exists());
 }
 
 #[test]

@@ -253,7 +253,8 @@ impl Worker {
 
 /// Loads the scene with the setup's size and depth overrides, validated, and the options.
 pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
-    let overrides = hyrt::scene::Overrides { size: setup.size, max_depth: setup.max_depth, exposure: None };
+    let overrides =
+        hyrt::scene::Overrides { size: setup.size, max_depth: setup.max_depth, ..Default::default() };
     let scene = hyrt::scene::load_with(&setup.scene, overrides)?;
     let mut knobs = setup.knobs.clone();
     knobs.preset = knobs.preset.or(Some(hyrt::options::Preset::Hybrid));

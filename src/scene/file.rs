@@ -6,7 +6,7 @@
 //! ```toml
 //! name = "cornell-bunny-mirror"          # optional, default: the file name without extension
 //!
-//! [camera]                               # optional: without it the scene is framed automatically
+//! [camera]                               # optional: without it, a glTF file's or an automatic one
 //! eye = [0.0, 1.0, 6.8]
 //! target = [0.0, 1.0, 0.0]               # exactly one of target / direction
 //! # direction = [-0.5607, -0.2336, 0.7944]
@@ -51,11 +51,17 @@
 //!   `camera.fov_y`, `mesh.path`, `material.name`, `light.position`, `light.intensity`) and a
 //!   file without any `[[mesh]]`. Integers are accepted wherever a number is expected.
 //! - `[camera]`: the viewing direction is `target - eye`, or `direction` as given (it need not
-//!   be normalised); giving both or neither is an error. Without a `[camera]` table the camera
-//!   looks at the centre of the scene's bounds from the front (+Z) and slightly above, with a
-//!   vertical fov of 45 degrees; a light at the camera is then added only if the file has no
-//!   `[[light]]`. With a `[camera]` and no `[[light]]`, the scene has no lights.
-//! - `[settings]`: defaults are width 640, height 480, max_depth 5, exposure 1.0.
+//!   be normalised); giving both or neither is an error. Without a `[camera]` table the scene
+//!   is seen through the first camera its glTF files define (`--camera N` picks another), and
+//!   without one either the camera looks at the centre of the scene's bounds from the front
+//!   (+Z) and slightly above, with a vertical fov of 45 degrees; a light at the camera is then
+//!   added only if the scene has no light (`[[light]]` or a glTF file's). With a `[camera]` and
+//!   no light, the scene has no lights.
+//! - glTF files bring their cameras and point lights (`KHR_lights_punctual`), moved by the
+//!   mesh's transform; `[[light]]`s are added to those lights. See [`super::gltf`] for their
+//!   units.
+//! - `[settings]`: defaults are width 640, height 480, max_depth 5, exposure 1.0. Without a
+//!   `width` or `height`, a glTF camera's aspect ratio sets the height from the width.
 //! - `[indirect]`: the scene is rendered with indirect light from `vpls` virtual point lights
 //!   (visibility by rays in the reference, by maps in the hybrid; see the CLI's `--indirect`).
 //!   Without it, only direct light. `clamp` must be a finite number `>= 0`.
@@ -324,8 +330,9 @@ pub fn load(path: &Path) -> Result<Scene> {
         }
     }
 
-    scene.lights =
-        file.light.iter().map(|l| PointLight { position: l.position.0, intensity: l.intensity.0 }).collect();
+    scene
+        .lights
+        .extend(file.light.iter().map(|l| PointLight { position: l.position.0, intensity: l.intensity.0 }));
 
     if let Some(s) = &file.settings {
         let d = &mut scene.settings;
@@ -333,6 +340,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         d.height = s.height.unwrap_or(d.height);
         d.max_depth = s.max_depth.unwrap_or(d.max_depth);
         d.exposure = s.exposure.unwrap_or(d.exposure);
+        scene.size_given = s.width.is_some() || s.height.is_some();
     }
 
     if let Some(ind) = &file.indirect {
@@ -352,7 +360,12 @@ pub fn load(path: &Path) -> Result<Scene> {
 
     match camera {
         Some(c) => scene.camera = Some(c),
-        None => scene.frame_automatically(),
+        None => {
+            if !scene.cameras.is_empty() {
+                scene.use_file_camera(0)?;
+            }
+            scene.frame_automatically();
+        }
     }
     Ok(scene)
 }

@@ -1,4 +1,18 @@
-//! glTF 2.0 / GLB loading via the gltf crate: geometry, node transforms, material factors.
+//! glTF 2.0 / GLB loading via the gltf crate: geometry, node transforms, material factors,
+//! cameras and point lights.
+//!
+//! **Cameras.** Each perspective camera placed by a node of the scene, in the file's camera
+//! order (the first node that places it): the eye at the node's origin, looking down its -Z
+//! with +Y up, `yfov` as the vertical field of view and `aspectRatio`, when given, as the
+//! image's (`Scene::use_file_camera`). Orthographic cameras and cameras no node places are
+//! skipped with a warning.
+//!
+//! **Lights** (`KHR_lights_punctual`). Point lights at their node's origin. Their intensity is
+//! in candela (lumens per steradian); hyrt's lights are radiometric, in watts per steradian,
+//! so it is divided by 683 lm/W (the luminous efficacy that defines the candela, of light of
+//! 555 nm) and multiplied by the light's linear `color`. `range` is ignored: light falls off
+//! with the square of the distance alone, as the specification allows. Spot and directional
+//! lights are skipped with a warning (hyrt has point lights only).
 //!
 //! The crate is built without its `import` feature, so buffers are resolved here: the GLB binary
 //! chunk, external files relative to the glTF file, and base64 `data:` URIs. Every accessor is
@@ -14,13 +28,16 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 
 use super::obj::{read_bytes, unit_normals};
-use super::{Material, MeshData, MeshRange};
+use super::{Camera, FileCamera, Material, MeshData, MeshRange, PointLight};
 
 /// Diffuse colour of the material given to primitives without one.
 const DEFAULT_KD: Vec3 = Vec3::splat(0.8);
 
-/// Required extensions that do not affect geometry; hyrt ignores materials' extensions,
-/// textures and lights anyway, so files requiring them still load.
+/// Lumens per watt of light at 555 nm: candela (lm/sr) to W/sr (module docs).
+pub const LUMENS_PER_WATT: f32 = 683.0;
+
+/// Required extensions that do not affect geometry; hyrt ignores materials' extensions and
+/// textures, and reads the lights it can (module docs), so files requiring them still load.
 fn ignorable_extension(name: &str) -> bool {
     name.starts_with("KHR_materials_")
         || matches!(
@@ -127,6 +144,8 @@ pub fn load(path: &Path) -> Result<MeshData> {
     // Depth-first, children in file order. glTF requires the node graph to be a forest, so a
     // node reached twice means a cycle (or a shared child): rejected rather than looped over.
     let mut visited = vec![false; document.nodes().len()];
+    // Each camera as the first node that places it sees it, by camera index.
+    let mut cameras: Vec<Option<Result<FileCamera, String>>> = vec![None; document.cameras().len()];
     let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
         if std::mem::replace(&mut visited[node.index()], true) {
@@ -136,8 +155,28 @@ pub fn load(path: &Path) -> Result<MeshData> {
         if let Some(mesh) = node.mesh() {
             loader.add_instance(&node, &mesh, world)?;
         }
+        if let Some(cam) = node.camera()
+            && let Some(slot @ None) = cameras.get_mut(cam.index())
+        {
+            *slot = Some(file_camera(&cam, world));
+        }
+        if let Some(light) = node.light() {
+            loader.add_light(&light, world);
+        }
         let children: Vec<gltf::Node> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    for (cam, placed) in document.cameras().zip(cameras) {
+        match placed {
+            Some(Ok(c)) => loader.mesh.cameras.push(c),
+            Some(Err(why)) => {
+                loader.mesh.warnings.push(format!("{shown}: {} {why}: skipped", camera_label(&cam)))
+            }
+            None => loader
+                .mesh
+                .warnings
+                .push(format!("{shown}: {} is placed by no node: skipped", camera_label(&cam))),
+        }
     }
 
     let Loader { mesh, skipped, .. } = loader;
@@ -150,6 +189,34 @@ pub fn load(path: &Path) -> Result<MeshData> {
         bail!("{shown}: has no triangles");
     }
     Ok(mesh)
+}
+
+/// How messages name camera `cam`: its index and, if it has one, its name.
+fn camera_label(cam: &gltf::Camera) -> String {
+    match cam.name() {
+        Some(n) => format!("camera {} '{n}'", cam.index()),
+        None => format!("camera {}", cam.index()),
+    }
+}
+
+/// Camera `cam` placed by a node with world transform `world` (module docs), or why not.
+fn file_camera(cam: &gltf::Camera, world: Mat4) -> std::result::Result<FileCamera, String> {
+    match cam.projection() {
+        gltf::camera::Projection::Perspective(p) => Ok(FileCamera {
+            label: camera_label(cam),
+            camera: Camera {
+                eye: world.transform_point3(Vec3::ZERO),
+                forward: world.transform_vector3(Vec3::NEG_Z),
+                up: world.transform_vector3(Vec3::Y),
+                fov_y_deg: p.yfov().to_degrees(),
+                fov_x_deg: None,
+            },
+            aspect: p.aspect_ratio(),
+        }),
+        gltf::camera::Projection::Orthographic(_) => {
+            Err("is orthographic (hyrt has perspective cameras only)".to_string())
+        }
+    }
 }
 
 /// Flattening state while walking the node tree.
@@ -166,6 +233,28 @@ struct Loader<'a> {
 }
 
 impl Loader<'_> {
+    /// Adds a `KHR_lights_punctual` light placed by `world`: a point light (module docs), or a
+    /// warning for the kinds hyrt does not have.
+    fn add_light(&mut self, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
+        use gltf::khr_lights_punctual::Kind;
+        let name = match light.name() {
+            Some(n) => format!("light {} '{n}'", light.index()),
+            None => format!("light {}", light.index()),
+        };
+        let kind = match light.kind() {
+            Kind::Point => {
+                let intensity = Vec3::from(light.color()) * (light.intensity() / LUMENS_PER_WATT);
+                self.mesh.lights.push(PointLight { position: world.transform_point3(Vec3::ZERO), intensity });
+                return;
+            }
+            Kind::Spot { .. } => "a spot light",
+            Kind::Directional => "a directional light",
+        };
+        self.mesh
+            .warnings
+            .push(format!("{}: {name} is {kind} (hyrt has point lights only): skipped", self.path.display()));
+    }
+
     /// Appends one instance of `mesh` (all its triangle primitives) placed by `world`.
     fn add_instance(&mut self, node: &gltf::Node, mesh: &gltf::Mesh, world: Mat4) -> Result<()> {
         let name =

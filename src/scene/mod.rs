@@ -44,6 +44,16 @@ impl Camera {
     }
 }
 
+/// A camera that a model file defines (a glTF camera placed by a node), in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileCamera {
+    /// Where it comes from, for messages: the file's camera index and name.
+    pub label: String,
+    pub camera: Camera,
+    /// The file's width over height, if it gives one: the image takes it when no size is set.
+    pub aspect: Option<f32>,
+}
+
 /// Render settings that travel with a scene (the CLI may override them).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -90,6 +100,12 @@ pub struct Scene {
     pub indirect: Option<IndirectSettings>,
     /// Where the scene came from (for messages); `None` for built-in scenes.
     pub source: Option<PathBuf>,
+    /// The cameras its model files define, in file order (`Overrides::camera` picks one).
+    pub cameras: Vec<FileCamera>,
+    /// Whether the scene file set the image size: a model file's camera aspect then leaves it.
+    pub size_given: bool,
+    /// What loading skipped or could not honour, for the user (never an error).
+    pub warnings: Vec<String>,
 }
 
 /// A scene's request for indirect light from virtual point lights: how many, and how they are
@@ -118,11 +134,26 @@ pub struct MeshData {
     pub material: Vec<u32>,
     pub materials: Vec<Material>,
     pub ranges: Vec<MeshRange>,
+    /// Cameras the file defines (glTF), in the file's camera order.
+    pub cameras: Vec<FileCamera>,
+    /// Point lights the file defines (glTF `KHR_lights_punctual`).
+    pub lights: Vec<PointLight>,
+    /// What the loader skipped or could not honour.
+    pub warnings: Vec<String>,
 }
 
 impl MeshData {
-    /// Applies an affine transform (normals by the inverse transpose).
+    /// Applies an affine transform (normals by the inverse transpose; cameras and lights
+    /// move with the geometry).
     pub fn transform(&mut self, m: Mat4) {
+        for c in &mut self.cameras {
+            let cam = &mut c.camera;
+            (cam.eye, cam.forward, cam.up) =
+                (m.transform_point3(cam.eye), m.transform_vector3(cam.forward), m.transform_vector3(cam.up));
+        }
+        for l in &mut self.lights {
+            l.position = m.transform_point3(l.position);
+        }
         let n = m.inverse().transpose();
         for t in &mut self.positions {
             for p in t.iter_mut() {
@@ -153,10 +184,14 @@ impl Scene {
         (self.materials.len() - 1) as u32
     }
 
-    /// Appends loaded geometry; its material ids are remapped after this scene's own.
+    /// Appends loaded geometry, with the cameras, lights and warnings of its file; its material
+    /// ids are remapped after this scene's own.
     pub fn add_mesh(&mut self, mesh: MeshData) {
         let mat_base = self.materials.len() as u32;
         let tri_base = self.positions.len() as u32;
+        self.cameras.extend(mesh.cameras);
+        self.lights.extend(mesh.lights);
+        self.warnings.extend(mesh.warnings);
         self.materials.extend(mesh.materials);
         for (i, t) in mesh.positions.iter().enumerate() {
             let n = mesh.normals.get(i).copied().flatten();
@@ -199,10 +234,54 @@ impl Scene {
         }
     }
 
+    /// Views the scene through camera `n` of its model files ([`Scene::cameras`]); unless the
+    /// image size was given, the image takes the camera's aspect (its width kept).
+    pub fn use_file_camera(&mut self, n: usize) -> Result<()> {
+        let Some(c) = self.cameras.get(n) else {
+            let list = if self.cameras.is_empty() {
+                "its files define none".to_string()
+            } else {
+                let names: Vec<String> =
+                    self.cameras.iter().enumerate().map(|(i, c)| format!("{i}: {}", c.label)).collect();
+                format!("its cameras are {}", names.join(", "))
+            };
+            bail!("{}: there is no camera {n}: {list}", self.origin());
+        };
+        self.camera = Some(c.camera);
+        if let Some(a) = c.aspect.filter(|a| a.is_finite() && *a > 0.0)
+            && !self.size_given
+        {
+            self.settings.height = ((self.settings.width as f32 / a).round() as u32).max(1);
+        }
+        Ok(())
+    }
+
+    /// An exposure for the scene's lights: a white diffuse surface at the centre of the bounds
+    /// facing them shows radiance about 1 (the irradiance there, `sum I / d^2` of the brightest
+    /// channel, times the exposure, is about pi). For model files that bring their own lights
+    /// in physical units, whose brightness no scene file has set an exposure for. `None`
+    /// without bounds or lit points.
+    pub fn exposure_for_lights(&self) -> Option<f32> {
+        let (lo, hi) = self.bounds()?;
+        let centre = (lo + hi) * 0.5;
+        let scale = (hi - lo).length().max(f32::MIN_POSITIVE.sqrt());
+        let e: f32 = self
+            .lights
+            .iter()
+            // At least a hundredth of the scene's size away: a light at the centre is not infinite.
+            .map(|l| {
+                l.intensity.max_element() / (l.position - centre).length_squared().max((scale * 0.01).powi(2))
+            })
+            .sum();
+        let x = std::f32::consts::PI / e;
+        (x.is_finite() && x > 0.0).then_some(x)
+    }
+
     /// Frames the scene with an automatic camera and one light when it has none (used for
     /// bare mesh files): the camera looks at the bounds' centre from the front (+Z) and
-    /// slightly above, the light sits at the camera, bright enough for an irradiance of
-    /// about pi at the centre (a white diffuse surface facing it shows radiance ~1).
+    /// slightly above, the light sits at the camera (the automatic one or the scene's own),
+    /// bright enough for an irradiance of about pi at the centre (a white diffuse surface
+    /// facing it shows radiance ~1).
     pub fn frame_automatically(&mut self) {
         let Some((lo, hi)) = self.bounds() else { return };
         let centre = (lo + hi) * 0.5;
@@ -212,11 +291,11 @@ impl Scene {
         let dist = radius / (fov_y.to_radians() * 0.5).sin();
         let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
         let eye = centre + dir * dist;
-        if self.camera.is_none() {
-            self.camera = Some(Camera::look_at(eye, centre, Vec3::Y, fov_y));
-        }
+        let camera = *self.camera.get_or_insert(Camera::look_at(eye, centre, Vec3::Y, fov_y));
         if self.lights.is_empty() {
-            let pos = eye + Vec3::Y * radius * 0.5;
+            // Beside the camera (the automatic one or the scene's own): what it sees is lit.
+            let up = camera.up.normalize_or(Vec3::Y);
+            let pos = camera.eye + up * radius * 0.5;
             let d2 = (pos - centre).length_squared();
             self.lights.push(PointLight { position: pos, intensity: Vec3::splat(std::f32::consts::PI * d2) });
         }
@@ -316,6 +395,15 @@ pub fn load(spec: &str) -> Result<Scene> {
                 Scene::new(&path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
             scene.source = Some(path.to_path_buf());
             scene.add_mesh(load_mesh(path)?);
+            // The file's own camera and lights first; what it lacks is made up.
+            if !scene.cameras.is_empty() {
+                scene.use_file_camera(0)?;
+            }
+            if !scene.lights.is_empty()
+                && let Some(e) = scene.exposure_for_lights()
+            {
+                scene.settings.exposure = e;
+            }
             scene.frame_automatically();
             scene
         } else {
@@ -336,11 +424,16 @@ pub struct Overrides {
     pub size: Option<(u32, u32)>,
     pub max_depth: Option<u32>,
     pub exposure: Option<f32>,
+    /// View through this camera of the scene's model files ([`Scene::use_file_camera`]).
+    pub camera: Option<usize>,
 }
 
 /// [`load`], with some render settings overridden, validated again with them.
 pub fn load_with(spec: &str, o: Overrides) -> Result<Scene> {
     let mut scene = load(spec)?;
+    if let Some(n) = o.camera {
+        scene.use_file_camera(n)?;
+    }
     let s = &mut scene.settings;
     if let Some((w, h)) = o.size {
         (s.width, s.height) = (w, h);

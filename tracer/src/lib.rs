@@ -181,8 +181,7 @@ impl Bvh {
     fn kept(tris: &[[Vec3; 3]], scale: f32) -> (Vec<Padded>, Vec<u32>) {
         let mut kept = Vec::with_capacity(tris.len());
         let mut kept_ids = Vec::with_capacity(tris.len());
-        let mut seen =
-            rustc_hash::FxHashSet::with_capacity_and_hasher(tris.len(), Default::default());
+        let mut seen = rustc_hash::FxHashSet::with_capacity_and_hasher(tris.len(), Default::default());
         let bits = |t: &[Vec3; 3]| t.map(|p| p.to_array().map(f32::to_bits));
         for (i, t) in tris.iter().enumerate() {
             let point = t[0] == t[1] && t[1] == t[2];

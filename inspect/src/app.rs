@@ -879,6 +879,12 @@ impl Inspector {
                 if m.is_mirror() {
                     ui.label(format!("  Kr {} ({})", vec3(m.mirror), m.mirror_source));
                 }
+                if let Some((name, (w, ht))) = &h.texture {
+                    let file = std::path::Path::new(name)
+                        .file_name()
+                        .map_or(name.clone(), |f| f.to_string_lossy().into_owned());
+                    ui.label(format!("  texture {file} ({w}x{ht}): albedo {}", vec3(h.albedo)));
+                }
                 ui.label(format!("  t {:.4}  at {}", h.t, vec3(h.p)));
             }
         }

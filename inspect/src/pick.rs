@@ -39,6 +39,10 @@ pub struct HitInfo {
     pub bary: [f32; 3],
     pub p: Vec3,
     pub material: hyrt::scene::Material,
+    /// The diffuse albedo there (the material's `Kd`, times its texture if it has one).
+    pub albedo: Vec3,
+    /// The material's texture: its file and size.
+    pub texture: Option<(String, (u32, u32))>,
 }
 
 /// One light at the picked pixel.
@@ -91,7 +95,9 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
     let surf = hit.map(|h| SurfaceHit::new(scene, &h, r.camera.direction(x, y).normalize()));
     let hit_info = hit.zip(surf).map(|(h, s)| {
         let m = &scene.materials[scene.material[h.tri as usize] as usize];
-        HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.clone() }
+        let texture =
+            m.texture.and_then(|k| scene.textures.get(k as usize)).map(|t| (t.name.clone(), t.size()));
+        HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.clone(), albedo: s.albedo, texture }
     });
     let bufs = r.frame.shadows.as_ref();
     let by_rays = r.options.shadows == Shadows::Rays;

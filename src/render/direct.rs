@@ -108,7 +108,7 @@ pub(crate) fn reflect(
             lobe_sum += e * m.highlight_lobe(hit.ns, wi, hit.wo);
         }
     }
-    let diffuse = m.diffuse * FRAC_1_PI * sum;
+    let diffuse = hit.albedo * FRAC_1_PI * sum;
     if highlight { diffuse + m.highlight * lobe_sum } else { diffuse }
 }
 

@@ -270,10 +270,10 @@ impl Vpls<'_> {
         stride: usize,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let kd = r.kd(s.tri);
-        if kd == Vec3::ZERO {
+        if !r.diffuse(s.tri) {
             return Vec3::ZERO;
         }
+        let kd = s.albedo;
         let mut sum = Vec3::ZERO;
         let stride = stride.max(1);
         for (k, v) in self.vpls.iter().enumerate().skip(subset).step_by(stride) {
@@ -315,11 +315,10 @@ impl Vpls<'_> {
         stride: usize,
     ) -> Vec<Vec3> {
         let stride = stride.max(1);
-        let kd = |s: &SurfaceHit| r.kd(s.tri);
         // The diffuse points of each subset.
         let mut groups: Vec<(Vec<usize>, Points)> = vec![Default::default(); stride];
         for (j, (s, &q)) in hits.iter().zip(subsets).enumerate() {
-            if kd(s) != Vec3::ZERO {
+            if r.diffuse(s.tri) {
                 groups[q % stride].0.push(j);
                 groups[q % stride].1.push(&ShadePoint::of(s));
             }
@@ -335,7 +334,7 @@ impl Vpls<'_> {
                 gather::add_vpl(&self.consts[vi], &self.maps[vi], pts, &mut sums);
             }
             for (m, &j) in idx.iter().enumerate() {
-                out[j] = kd(&hits[j]) * FRAC_1_PI * sums.get(m) * stride as f32;
+                out[j] = hits[j].albedo * FRAC_1_PI * sums.get(m) * stride as f32;
             }
         }
         out
@@ -391,9 +390,8 @@ pub(crate) fn run(
     // The shading point of pixel `i`, if it is diffuse.
     let diffuse = |i: usize| {
         let h = gbuffer[i].as_ref()?;
-        let kd = r.kd(h.tri);
         let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
-        (kd != Vec3::ZERO).then(|| SurfaceHit::new(r.scene, h, dir))
+        r.diffuse(h.tri).then(|| SurfaceHit::new(r.scene, h, dir))
     };
 
     // The direct-light pass's shading points, which only the maps' gather reads.
@@ -474,11 +472,10 @@ pub(crate) fn run(
 
     let filtered = if k > 1 { interleave_filter(&irr, &geo, w, k) } else { irr };
     out.par_iter_mut().zip(filtered).enumerate().for_each(|(i, (o, e))| {
-        if let Some(h) = &gbuffer[i] {
-            let kd = r.kd(h.tri);
-            if kd != Vec3::ZERO {
-                *o = kd * FRAC_1_PI * e;
-            }
+        if let Some(h) = &gbuffer[i]
+            && r.diffuse(h.tri)
+        {
+            *o = r.pixel_albedo(i, h) * FRAC_1_PI * e;
         }
     });
     counts.into_iter().fold((RayCounts::default(), 0), |(mut c, n), (d, m)| {
@@ -514,7 +511,8 @@ fn gather_all(
         .par_chunks_mut(w * BAND)
         .zip(points.par_chunks(w * BAND))
         .zip(gbuffer.par_chunks(w * BAND))
-        .map(|((out, points), hits)| {
+        .enumerate()
+        .map(|(b, ((out, points), hits))| {
             let mut pts = Points::with_capacity(points.len());
             pts.set(points);
             let mut sums = Sums::default();
@@ -525,8 +523,7 @@ fn gather_all(
             let mut diffuse = 0u64;
             for (j, (o, (p, h))) in out.iter_mut().zip(points.iter().zip(hits)).enumerate() {
                 if let (Some(h), true) = (h, p.ns != Vec3::ZERO) {
-                    let kd = r.kd(h.tri);
-                    *o = kd * FRAC_1_PI * sums.get(j);
+                    *o = r.pixel_albedo(b * w * BAND + j, h) * FRAC_1_PI * sums.get(j);
                     diffuse += 1;
                 }
             }

@@ -289,14 +289,18 @@ impl<'a> Renderer<'a> {
         dropped
     }
 
-    /// The diffuse reflectance `Kd` of triangle `tri`'s material.
-    pub(crate) fn kd(&self, tri: u32) -> Vec3 {
-        self.scene.materials[self.scene.material[tri as usize] as usize].diffuse
-    }
-
     /// Whether triangle `tri`'s material reflects diffusely (indirect light reaches it).
     pub(crate) fn diffuse(&self, tri: u32) -> bool {
-        self.kd(tri) != Vec3::ZERO
+        self.scene.materials[self.scene.material[tri as usize] as usize].diffuse != Vec3::ZERO
+    }
+
+    /// The diffuse albedo at camera hit `h` of pixel `i`, as its [`SurfaceHit`] has it.
+    pub(crate) fn pixel_albedo(&self, i: usize, h: &Hit) -> Vec3 {
+        let w = self.scene.settings.width.max(1) as usize;
+        let dir = self.camera_ray((i % w) as u32, (i / w) as u32).dir;
+        let tri = &self.scene.positions[h.tri as usize];
+        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+        self.scene.albedo(h.tri, h.bary, h.t, ng.dot(-dir))
     }
 
     /// The camera ray through the centre of pixel `(x, y)`.

@@ -158,7 +158,7 @@ pub fn generate_from(
                 let s = SurfaceHit::new(scene, &h, ray.dir);
                 let m = &scene.materials[scene.material[h.tri as usize] as usize];
                 if m.diffuse != Vec3::ZERO {
-                    flux *= m.diffuse;
+                    flux *= s.albedo;
                     let position = offset_ray_origin(s.p, s.p_err, s.ng, s.ng);
                     vpls.push(Vpl {
                         position,

@@ -411,6 +411,8 @@ fn exclude(mut mesh: MeshData, names: &[String]) -> Result<MeshData> {
     mesh.normals.retain(|_| it.next().copied().unwrap_or(true));
     let mut it = keep.iter();
     mesh.material.retain(|_| it.next().copied().unwrap_or(true));
+    let mut it = keep.iter();
+    mesh.uvs.retain(|_| it.next().copied().unwrap_or(true));
     Ok(mesh)
 }
 

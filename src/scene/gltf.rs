@@ -7,6 +7,14 @@
 //! image's (`Scene::use_file_camera`). Orthographic cameras and cameras no node places are
 //! skipped with a warning.
 //!
+//! **Textures.** A material's `baseColorTexture` (an external file, a `data:` URI or a buffer
+//! view; PNG or JPEG) multiplies its diffuse albedo, read at the texture coordinates of its
+//! `texCoord` set, transformed by `KHR_texture_transform` when present (`offset`, `rotation`
+//! and `scale`, as the specification's matrix does them). It does not tint the highlight: a
+//! metal's colour, which is its highlight's, keeps its factor; metallic-roughness, normal and
+//! emissive textures are ignored. An image that cannot be read is a warning; the material
+//! keeps its factors.
+//!
 //! **Lights** (`KHR_lights_punctual`). Point lights at their node's origin. Their intensity is
 //! in candela (lumens per steradian); hyrt's lights are radiometric, in watts per steradian,
 //! so it is divided by 683 lm/W (the luminous efficacy that defines the candela, of light of
@@ -23,11 +31,12 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
 use base64::Engine as _;
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 
 use super::obj::{read_bytes, unit_normals};
+use super::texture::Texture;
 use super::{Camera, FileCamera, Material, MeshData, MeshRange, PointLight};
 
 /// Diffuse colour of the material given to primitives without one.
@@ -58,7 +67,8 @@ fn ignorable_extension(name: &str) -> bool {
 /// matrix and normals by its inverse transpose, and triangles of mirrored nodes (negative
 /// determinant) are re-wound so they stay counter-clockwise. Only `TRIANGLES` primitives are
 /// loaded; other modes are skipped. Each glTF material's metallic-roughness factors become a
-/// [`Material`] as [`Material::from_gltf`] maps them (textures are ignored). Each node instance of a mesh becomes a
+/// [`Material`] as [`Material::from_gltf`] maps them, its `baseColorTexture` (with its
+/// `KHR_texture_transform`) multiplying the diffuse term (module docs). Each node instance of a mesh becomes a
 /// [`MeshRange`] named after the node (or the mesh).
 pub fn load(path: &Path) -> Result<MeshData> {
     let shown = path.display();
@@ -106,26 +116,52 @@ pub fn load(path: &Path) -> Result<MeshData> {
     let document = gltf::Document::from_json(json).map_err(|e| anyhow!("{shown}: invalid glTF: {e}"))?;
     let buffers = load_buffers(path, &document, blob)?;
 
-    let materials: Vec<Material> = document
-        .materials()
-        .map(|m| {
-            let pbr = m.pbr_metallic_roughness();
-            let c = pbr.base_color_factor();
-            let name = m.name().map_or_else(|| format!("material{}", m.index().unwrap_or(0)), str::to_string);
-            Material::from_gltf(
-                &name,
-                Vec3::new(c[0], c[1], c[2]),
-                pbr.metallic_factor(),
-                pbr.roughness_factor(),
-            )
-        })
-        .collect();
+    // Each image decoded once, whichever materials read it; one that cannot be read leaves
+    // its materials with their factors, each with a warning.
+    let mut textures = Vec::new();
+    let mut images: Vec<Option<std::result::Result<u32, String>>> = vec![None; document.images().len()];
+    let mut warnings = Vec::new();
+    let mut uv_maps = Vec::new();
+    let mut materials = Vec::new();
+    for m in document.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        let c = pbr.base_color_factor();
+        let name = m.name().map_or_else(|| format!("material{}", m.index().unwrap_or(0)), str::to_string);
+        let mut mat = Material::from_gltf(
+            &name,
+            Vec3::new(c[0], c[1], c[2]),
+            pbr.metallic_factor(),
+            pbr.roughness_factor(),
+        );
+        let mut uv_map = None;
+        if let Some(info) = pbr.base_color_texture() {
+            let image = info.texture().source();
+            let got = images[image.index()].get_or_insert_with(|| {
+                decode_image(path, &image, &buffers).map(|t| {
+                    textures.push(t);
+                    textures.len() as u32 - 1
+                })
+            });
+            match got {
+                Ok(k) => {
+                    mat.texture = Some(*k);
+                    uv_map = Some(UvMap::of(&info));
+                }
+                Err(e) => warnings.push(format!(
+                    "{shown}: material '{name}': baseColorTexture: {e}; it is rendered with its factors"
+                )),
+            }
+        }
+        materials.push(mat);
+        uv_maps.push(uv_map);
+    }
     let draco_used = document.extensions_used().any(|e| e == "KHR_draco_mesh_compression");
     let mut loader = Loader {
         draco_used,
         path,
         buffers: &buffers,
-        mesh: MeshData { materials, ..Default::default() },
+        uv_maps,
+        mesh: MeshData { materials, textures, warnings, ..Default::default() },
         default_material: None,
         skipped: 0,
     };
@@ -219,10 +255,70 @@ fn file_camera(cam: &gltf::Camera, world: Mat4) -> std::result::Result<FileCamer
     }
 }
 
+/// Which texture coordinates a material's base colour texture reads, and how they are
+/// transformed (`KHR_texture_transform`: `uv' = offset + R(rotation) (scale uv)`, `R` the
+/// specification's `[[cos, -sin], [sin, cos]]`).
+#[derive(Clone, Copy, Debug)]
+struct UvMap {
+    set: u32,
+    offset: Vec2,
+    cos_sin: Vec2,
+    scale: Vec2,
+}
+
+impl UvMap {
+    fn of(info: &gltf::texture::Info) -> Self {
+        match info.texture_transform() {
+            Some(t) => Self {
+                set: t.tex_coord().unwrap_or(info.tex_coord()),
+                offset: Vec2::from(t.offset()),
+                cos_sin: Vec2::new(t.rotation().cos(), t.rotation().sin()),
+                scale: Vec2::from(t.scale()),
+            },
+            None => Self { set: info.tex_coord(), offset: Vec2::ZERO, cos_sin: Vec2::X, scale: Vec2::ONE },
+        }
+    }
+
+    fn apply(&self, uv: Vec2) -> Vec2 {
+        let s = uv * self.scale;
+        let (c, n) = (self.cos_sin.x, self.cos_sin.y);
+        self.offset + Vec2::new(c * s.x - n * s.y, n * s.x + c * s.y)
+    }
+}
+
+/// Decodes image `image` of the file at `path` (an external file, a `data:` URI or a buffer
+/// view), or says why not.
+fn decode_image(
+    path: &Path,
+    image: &gltf::Image,
+    buffers: &[Vec<u8>],
+) -> std::result::Result<Texture, String> {
+    let name = format!("image {}", image.index());
+    let bytes = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let data =
+                buffers.get(view.buffer().index()).ok_or_else(|| format!("{name}: its buffer is missing"))?;
+            data.get(view.offset()..view.offset() + view.length())
+                .ok_or_else(|| format!("{name}: its buffer view lies outside the buffer"))?
+                .to_vec()
+        }
+        gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+            Some(rest) => decode_data_uri(rest).map_err(|e| format!("{name}: {e}"))?,
+            None => {
+                let file = path.parent().unwrap_or(Path::new("")).join(percent_decode(uri));
+                return Texture::load(&file).map_err(|e| format!("{e:#}"));
+            }
+        },
+    };
+    Texture::decode(&name, &bytes).map_err(|e| format!("{e:#}"))
+}
+
 /// Flattening state while walking the node tree.
 struct Loader<'a> {
     path: &'a Path,
     buffers: &'a [Vec<u8>],
+    /// Per material, its base colour texture's coordinates, if it has one.
+    uv_maps: Vec<Option<UvMap>>,
     mesh: MeshData,
     /// Index of the lazily added default material.
     default_material: Option<u32>,
@@ -282,6 +378,24 @@ impl Loader<'_> {
                     (self.mesh.materials.len() - 1) as u32
                 }),
             };
+            // The base colour texture's coordinates, transformed; none (a texture then reads
+            // its first texel) where the primitive lacks them.
+            let uvs: Option<Vec<Vec2>> =
+                self.uv_maps.get(material as usize).copied().flatten().and_then(|map| {
+                    let acc = primitive.get(&Semantic::TexCoords(map.set))?;
+                    let types = [DataType::F32, DataType::U8, DataType::U16];
+                    (acc.count() == positions.len()
+                        && check_accessor(&acc, self.buffers, &types, Dimensions::Vec2).is_ok())
+                    .then_some(())?;
+                    let reader = primitive.reader(|b| self.buffers.get(b.index()).map(Vec::as_slice));
+                    Some(
+                        reader
+                            .read_tex_coords(map.set)?
+                            .into_f32()
+                            .map(|t| map.apply(Vec2::from(t)))
+                            .collect(),
+                    )
+                });
             for tri in indices.chunks_exact(3) {
                 let corner = |i: u32| {
                     positions.get(i as usize).copied().ok_or_else(|| {
@@ -304,10 +418,16 @@ impl Loader<'_> {
                     }
                     _ => None,
                 };
+                let mut uv = uvs.as_ref().and_then(|u| {
+                    Some([*u.get(tri[0] as usize)?, *u.get(tri[1] as usize)?, *u.get(tri[2] as usize)?])
+                });
                 if mirrored {
                     p.swap(1, 2);
                     if let Some(n) = &mut n {
                         n.swap(1, 2);
+                    }
+                    if let Some(uv) = &mut uv {
+                        uv.swap(1, 2);
                     }
                 }
                 if !p.iter().all(|v| v.is_finite()) {
@@ -315,6 +435,7 @@ impl Loader<'_> {
                 }
                 self.mesh.positions.push(p);
                 self.mesh.normals.push(n);
+                self.mesh.uvs.push(uv);
                 self.mesh.material.push(material);
             }
         }

@@ -49,7 +49,8 @@
 //!
 //! # Reading glTF metallic-roughness
 //!
-//! With base colour `c`, metallic `m` and roughness `r` (the factors; textures are ignored):
+//! With base colour `c`, metallic `m` and roughness `r` (the factors; a base colour texture
+//! multiplies the diffuse term alone, `src/scene/texture.rs`):
 //!
 //! - the diffuse albedo is `c (1 - m)`, and the specular reflectance `F0 = 0.04 (1 - m) + c m`
 //!   (the glTF specification's mix of a dielectric's 4 % and the metal's colour);
@@ -89,6 +90,9 @@ pub struct Material {
     pub mirror: Vec3,
     /// Why the material has a mirror reflectance (shown by the plan); meaningless without one.
     pub mirror_source: MirrorSource,
+    /// The texture that multiplies `diffuse` (an index into the scene's textures; MTL
+    /// `map_Kd`, glTF `baseColorTexture`), if any.
+    pub texture: Option<u32>,
 }
 
 /// Where a material's mirror reflectance came from.
@@ -127,6 +131,7 @@ impl Material {
             shininess: DEFAULT_SHININESS,
             mirror: Vec3::ZERO,
             mirror_source: MirrorSource::Code,
+            texture: None,
         }
     }
 

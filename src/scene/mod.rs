@@ -10,13 +10,14 @@ pub mod file;
 pub mod gltf;
 pub mod material;
 pub mod obj;
+pub mod texture;
 
 pub use material::{Material, MirrorSource};
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 /// An isotropic point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,6 +101,11 @@ pub struct Scene {
     pub indirect: Option<IndirectSettings>,
     /// Where the scene came from (for messages); `None` for built-in scenes.
     pub source: Option<PathBuf>,
+    /// The textures its materials read ([`Material::texture`]).
+    pub textures: Vec<texture::Texture>,
+    /// Per triangle, its corners' texture coordinates: empty when the scene has no texture,
+    /// else one entry per triangle (zero where the file gave none).
+    pub uvs: Vec<[Vec2; 3]>,
     /// The cameras its model files define, in file order (`Overrides::camera` picks one).
     pub cameras: Vec<FileCamera>,
     /// Whether the scene file set the image size: a model file's camera aspect then leaves it.
@@ -134,6 +140,10 @@ pub struct MeshData {
     pub material: Vec<u32>,
     pub materials: Vec<Material>,
     pub ranges: Vec<MeshRange>,
+    /// Per triangle, its corners' texture coordinates, where the file gave them.
+    pub uvs: Vec<Option<[Vec2; 3]>>,
+    /// The textures its materials read (their `texture` indexes this list).
+    pub textures: Vec<texture::Texture>,
     /// Cameras the file defines (glTF), in the file's camera order.
     pub cameras: Vec<FileCamera>,
     /// Point lights the file defines (glTF `KHR_lights_punctual`).
@@ -192,7 +202,18 @@ impl Scene {
         self.cameras.extend(mesh.cameras);
         self.lights.extend(mesh.lights);
         self.warnings.extend(mesh.warnings);
-        self.materials.extend(mesh.materials);
+        let tex_base = self.textures.len() as u32;
+        self.materials.extend(mesh.materials.into_iter().map(|mut m| {
+            m.texture = m.texture.map(|t| t + tex_base);
+            m
+        }));
+        self.textures.extend(mesh.textures);
+        if !self.textures.is_empty() {
+            // Coordinates for every triangle once any texture exists (zero where none).
+            self.uvs.resize(tri_base as usize, [Vec2::ZERO; 3]);
+            let n = mesh.positions.len();
+            self.uvs.extend((0..n).map(|i| mesh.uvs.get(i).copied().flatten().unwrap_or([Vec2::ZERO; 3])));
+        }
         for (i, t) in mesh.positions.iter().enumerate() {
             let n = mesh.normals.get(i).copied().flatten();
             self.push_triangle(*t, n, mat_base + mesh.material[i]);
@@ -217,6 +238,30 @@ impl Scene {
     pub fn push_quad(&mut self, q: [Vec3; 4], material: u32) {
         self.push_triangle([q[0], q[1], q[2]], None, material);
         self.push_triangle([q[0], q[2], q[3]], None, material);
+    }
+
+    /// The diffuse albedo at barycentrics `bary` of triangle `tri`, hit at distance `t` along
+    /// a ray making cosine `cos` with its normal: the material's `diffuse`, times its texture
+    /// at the level the footprint of one pixel of the scene's camera asks for there
+    /// ([`texture::footprint`]; for rays that are not the camera's, their own length stands
+    /// for the distance). Exactly `diffuse` for a material without a texture.
+    pub fn albedo(&self, tri: u32, bary: [f32; 3], t: f32, cos: f32) -> Vec3 {
+        let m = &self.materials[self.material[tri as usize] as usize];
+        let Some(k) = m.texture else { return m.diffuse };
+        let (Some(tex), Some(uv)) = (self.textures.get(k as usize), self.uvs.get(tri as usize)) else {
+            return m.diffuse;
+        };
+        let at = uv[0] * bary[0] + uv[1] * bary[1] + uv[2] * bary[2];
+        let density = texture::uv_per_world(&self.positions[tri as usize], uv);
+        m.diffuse * tex.sample(at, texture::footprint(t, self.pixel_angle(), cos, density))
+    }
+
+    /// The angle one pixel of the camera subtends vertically (radians, at the image's centre);
+    /// 0 without a camera.
+    pub fn pixel_angle(&self) -> f32 {
+        self.camera.map_or(0.0, |c| {
+            2.0 * (c.fov_y_deg.to_radians() * 0.5).tan() / self.settings.height.max(1) as f32
+        })
     }
 
     /// Axis-aligned bounds of all triangles, `None` for an empty scene.

@@ -13,8 +13,9 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
+use super::texture::Texture;
 use super::{Material, MeshData, MeshRange};
 
 /// Diffuse colour for materials without `Kd` and for faces without a material.
@@ -71,21 +72,39 @@ pub fn load(path: &Path) -> Result<MeshData> {
         Err(_) => return Err(locate_error(path, &text, "the OBJ parser failed")),
     };
 
-    let mut mesh = MeshData {
-        materials: materials
-            .iter()
-            .map(|m| {
-                Material::from_mtl(
-                    &m.name,
-                    m.diffuse.map_or(DEFAULT_KD, Vec3::from),
-                    m.specular.map_or(Vec3::ZERO, Vec3::from),
-                    m.shininess,
-                    m.illumination_model,
-                )
-            })
-            .collect(),
-        ..Default::default()
-    };
+    let mut mesh = MeshData::default();
+    // Each texture file decoded once, whichever materials read it; one that cannot be read
+    // leaves its materials with their Kd, each with a warning.
+    let mut loaded: std::collections::HashMap<String, std::result::Result<u32, String>> = Default::default();
+    for m in &materials {
+        let mut mat = Material::from_mtl(
+            &m.name,
+            m.diffuse.map_or(DEFAULT_KD, Vec3::from),
+            m.specular.map_or(Vec3::ZERO, Vec3::from),
+            m.shininess,
+            m.illumination_model,
+        );
+        if let Some(file) = &m.diffuse_texture {
+            let got = loaded.entry(file.clone()).or_insert_with(|| {
+                match Texture::load(&any_case(Path::new(file))) {
+                    Ok(t) => {
+                        mesh.textures.push(t);
+                        Ok(mesh.textures.len() as u32 - 1)
+                    }
+                    Err(e) => Err(format!("{e:#}")),
+                }
+            });
+            match got {
+                Ok(k) => mat.texture = Some(*k),
+                Err(e) => mesh.warnings.push(format!(
+                    "{}: material '{}': map_Kd {e}; it is rendered with its Kd",
+                    path.display(),
+                    m.name
+                )),
+            }
+        }
+        mesh.materials.push(mat);
+    }
     let mut default_material = None;
     for model in &models {
         let m = &model.mesh;
@@ -104,8 +123,10 @@ pub fn load(path: &Path) -> Result<MeshData> {
             }),
         };
         // With `single_index`, normals line up with positions only when every corner had one;
-        // a model mixing faces with and without normals falls back to face normals.
+        // a model mixing faces with and without normals falls back to face normals. The same
+        // for texture coordinates.
         let has_normals = !m.normals.is_empty() && m.normals.len() == m.positions.len();
+        let has_uvs = !m.texcoords.is_empty() && m.texcoords.len() / 2 == m.positions.len() / 3;
         for tri in m.indices.chunks_exact(3) {
             let p = corners(&m.positions, tri).ok_or_else(|| {
                 anyhow!("{}: internal error: tobj returned an index out of range", path.display())
@@ -116,6 +137,12 @@ pub fn load(path: &Path) -> Result<MeshData> {
             } else {
                 None
             });
+            // OBJ's `vt` counts v from the image's bottom; textures count rows from the top.
+            let uv = |i: u32| {
+                let i = i as usize * 2;
+                m.texcoords.get(i..i + 2).map(|t| Vec2::new(t[0], 1.0 - t[1]))
+            };
+            mesh.uvs.push(if has_uvs { (|| Some([uv(tri[0])?, uv(tri[1])?, uv(tri[2])?]))() } else { None });
             mesh.material.push(material);
         }
         let count = mesh.positions.len() as u32 - first;
@@ -345,11 +372,46 @@ fn load_mtllib(obj: &Path, obj_text: &str, dir: &Path, name: &Path) -> Result<to
         })?;
         let text = String::from_utf8_lossy(&bytes);
         let normalised = normalise_mtl(&file, obj, &text)?;
-        let (mats, map) = tobj::load_mtl_buf(&mut normalised.as_bytes())
+        let (mut mats, map) = tobj::load_mtl_buf(&mut normalised.as_bytes())
             .map_err(|e| anyhow!("{}: malformed material library: {e}", file.display()))?;
+        // A texture's file is relative to its library: kept as a path from here.
+        let lib_dir = file.parent().unwrap_or(Path::new(""));
+        for m in &mut mats {
+            if let Some(t) = &mut m.diffuse_texture {
+                *t = lib_dir.join(texture_file(t)).to_string_lossy().into_owned();
+            }
+        }
         merge_materials(&mut materials, &mut names, mats, map);
     }
     Ok(Ok((materials, names)))
+}
+
+/// `path`, or when no such file exists, the file of its directory whose name matches it but
+/// for case: MTL files written on case-insensitive systems often name `WALL.JPG` for
+/// `wall.jpg`.
+fn any_case(path: &Path) -> PathBuf {
+    if path.exists() {
+        return path.to_path_buf();
+    }
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name().and_then(|n| n.to_str())) else {
+        return path.to_path_buf();
+    };
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    let found = std::fs::read_dir(dir).ok().and_then(|entries| {
+        entries
+            .flatten()
+            .map(|e| e.path())
+            .find(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.eq_ignore_ascii_case(name)))
+    });
+    found.unwrap_or_else(|| path.to_path_buf())
+}
+
+/// The file name of a texture statement's argument: its last word when options (`-s 1 1 1`,
+/// `-bm 0.5`, ...) come first, which hyrt does not honour; the whole argument otherwise (file
+/// names may hold spaces).
+fn texture_file(arg: &str) -> &str {
+    let arg = arg.trim();
+    if arg.starts_with('-') { arg.split_whitespace().last().unwrap_or(arg) } else { arg }
 }
 
 /// Appends one library's materials, later definitions of a name winning (as in tobj).

@@ -1,0 +1,271 @@
+//! Colour textures: decoded once from sRGB to linear, kept as a mip chain, sampled bilinearly
+//! at the level a shading point's footprint asks for.
+//!
+//! # Levels
+//!
+//! Level 0 is the image; each next level halves both sides (rounding down, at least one
+//! texel), each of its texels the mean of the 2x2 (or, on an odd side's last row or column,
+//! 2x1, 1x2 or 1x1) texels of the level above it, in linear light.
+//!
+//! # Which level
+//!
+//! A shading point covers a footprint of `w` in texture coordinates (`u` and `v` in `[0, 1]`
+//! over the image; [`footprint`] derives it). At level `k` a texel spans `2^k / n` of them, `n`
+//! the image's larger side, so the level whose texels are about as large as the footprint is
+//! `k = floor(log2(w n))`, clamped to the chain: the texels are then no larger than the
+//! footprint (at most twice finer), the choice that keeps detail and still averages what one
+//! pixel covers. `w <= 0`, NaN or tiny gives level 0.
+//!
+//! # Addressing
+//!
+//! Coordinates repeat (glTF's default wrap and what OBJ files expect): `u` and `u + 1` read the
+//! same texel. `v = 0` is the image's top row (glTF's convention; OBJ's `vt` counts from the
+//! bottom, and the OBJ loader flips it). Bilinear weights come from the point's offset to the
+//! four texel centres around it, wrapping at the edges.
+
+use std::path::Path;
+
+use anyhow::{Result, anyhow};
+use glam::{Vec2, Vec3};
+
+/// A decoded colour texture with its mip chain (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Where it was read from, for messages.
+    pub name: String,
+    levels: Vec<Level>,
+}
+
+/// One level of the chain: `width x height` linear RGB texels, row-major, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+struct Level {
+    width: u32,
+    height: u32,
+    texels: Vec<Vec3>,
+}
+
+/// sRGB-encoded value `c` (0..=255) to linear light (IEC 61966-2-1).
+pub fn srgb_to_linear(c: u8) -> f32 {
+    let x = f32::from(c) / 255.0;
+    if x <= 0.04045 { x / 12.92 } else { ((x + 0.055) / 1.055).powf(2.4) }
+}
+
+impl Texture {
+    /// A texture from `width x height` sRGB-encoded RGB texels (row-major, 3 bytes each, row 0
+    /// at the top); `None` for an empty image or a buffer of the wrong length.
+    pub fn from_srgb8(name: &str, width: u32, height: u32, rgb: &[u8]) -> Option<Self> {
+        if width == 0 || height == 0 || rgb.len() != width as usize * height as usize * 3 {
+            return None;
+        }
+        let lut: Vec<f32> = (0..=255).map(srgb_to_linear).collect();
+        let texels = rgb
+            .chunks_exact(3)
+            .map(|c| Vec3::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]))
+            .collect();
+        let mut levels = vec![Level { width, height, texels }];
+        while let Some(next) = levels.last().and_then(Level::half) {
+            levels.push(next);
+        }
+        Some(Self { name: name.to_string(), levels })
+    }
+
+    /// Decodes an image file (PNG or JPEG; alpha is dropped).
+    pub fn load(path: &Path) -> Result<Self> {
+        let bytes = super::obj::read_bytes(path)?;
+        Self::decode(&path.display().to_string(), &bytes)
+    }
+
+    /// Decodes an encoded image (PNG or JPEG) named `name` in messages.
+    pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
+        let img =
+            image::load_from_memory(bytes).map_err(|e| anyhow!("{name}: cannot decode the image: {e}"))?;
+        let rgb = img.to_rgb8();
+        Self::from_srgb8(name, rgb.width(), rgb.height(), rgb.as_raw())
+            .ok_or_else(|| anyhow!("{name}: the image is empty"))
+    }
+
+    /// Width and height of level 0.
+    pub fn size(&self) -> (u32, u32) {
+        (self.levels[0].width, self.levels[0].height)
+    }
+
+    /// Number of levels in the chain.
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// The level a footprint of `w` texture coordinates reads (module docs).
+    pub fn level_for(&self, w: f32) -> usize {
+        let (width, height) = self.size();
+        let t = w * width.max(height) as f32;
+        // Below two texels (NaN too): level 0.
+        if t.is_nan() || t < 2.0 {
+            return 0;
+        }
+        // floor(log2(t)) from the exponent, exactly (t is normal and >= 2 here).
+        let k = ((t.to_bits() >> 23) & 0xff) as usize - 127;
+        k.min(self.levels.len() - 1)
+    }
+
+    /// The colour at texture coordinates `uv` for a footprint of `w` (module docs): bilinear
+    /// at [`Texture::level_for`]`(w)`. Non-finite coordinates read texel (0, 0).
+    pub fn sample(&self, uv: Vec2, w: f32) -> Vec3 {
+        self.levels[self.level_for(w)].bilinear(uv)
+    }
+}
+
+impl Level {
+    /// The next level (module docs), `None` at 1x1.
+    fn half(&self) -> Option<Self> {
+        if self.width == 1 && self.height == 1 {
+            return None;
+        }
+        let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
+        let mut texels = Vec::with_capacity(w as usize * h as usize);
+        for y in 0..h {
+            for x in 0..w {
+                // The texels of this level that texel (x, y) of the next covers.
+                let xs = if self.width == 1 {
+                    0..1
+                } else {
+                    2 * x..(2 * x + 2 + u32::from(x == w - 1 && self.width % 2 == 1)).min(self.width)
+                };
+                let ys = if self.height == 1 {
+                    0..1
+                } else {
+                    2 * y..(2 * y + 2 + u32::from(y == h - 1 && self.height % 2 == 1)).min(self.height)
+                };
+                let (mut sum, mut n) = (Vec3::ZERO, 0.0f32);
+                for sy in ys {
+                    for sx in xs.clone() {
+                        sum += self.texels[(sy * self.width + sx) as usize];
+                        n += 1.0;
+                    }
+                }
+                texels.push(sum / n);
+            }
+        }
+        Some(Self { width: w, height: h, texels })
+    }
+
+    /// Bilinear interpolation of the four texel centres around `uv`, repeating.
+    fn bilinear(&self, uv: Vec2) -> Vec3 {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let (x, y) = (uv.x * w - 0.5, uv.y * h - 0.5);
+        if !(x.is_finite() && y.is_finite()) {
+            return self.texels[0];
+        }
+        let (fx, fy) = (x.floor(), y.floor());
+        let (ax, ay) = (x - fx, y - fy);
+        // Wrapped texel indices; `rem_euclid` of a float keeps huge coordinates in range.
+        let wrap = |v: f32, n: u32| (v.rem_euclid(n as f32) as u32).min(n - 1);
+        let (x0, y0) = (wrap(fx, self.width), wrap(fy, self.height));
+        let (x1, y1) = ((x0 + 1) % self.width, (y0 + 1) % self.height);
+        let t = |x: u32, y: u32| self.texels[(y * self.width + x) as usize];
+        let top = t(x0, y0) * (1.0 - ax) + t(x1, y0) * ax;
+        let bottom = t(x0, y1) * (1.0 - ax) + t(x1, y1) * ax;
+        top * (1.0 - ay) + bottom * ay
+    }
+}
+
+/// The footprint in texture coordinates of a shading point seen at distance `t` along a ray
+/// whose pixel subtends `pixel_angle` radians, on a triangle whose texture coordinates cover
+/// `uv_per_world` of them per unit of length (`sqrt(uv area / world area)`), seen at cosine
+/// `cos` to its normal: the pixel's footprint on the surface is about `t pixel_angle` across,
+/// stretched by `1 / cos` along one axis; its geometric mean `t pixel_angle / sqrt(cos)` is
+/// the width used (anisotropy is not filtered). `cos` is taken as at least 1/64, so that
+/// grazing views do not blur to the last level.
+pub fn footprint(t: f32, pixel_angle: f32, cos: f32, uv_per_world: f32) -> f32 {
+    t * pixel_angle / cos.abs().max(1.0 / 64.0).sqrt() * uv_per_world
+}
+
+/// `sqrt(uv area / world area)` of a triangle with corners `p` and texture coordinates `uv`:
+/// texture coordinates per unit of length on it, for [`footprint`]. 0 for a degenerate one.
+pub fn uv_per_world(p: &[Vec3; 3], uv: &[Vec2; 3]) -> f32 {
+    let world = (p[1] - p[0]).cross(p[2] - p[0]).length();
+    let (a, b) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let tex = (a.x * b.y - a.y * b.x).abs();
+    let r = (tex / world).sqrt();
+    if r.is_finite() { r } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tex(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 3]) -> Texture {
+        let f = &f;
+        let rgb: Vec<u8> = (0..h).flat_map(|y| (0..w).flat_map(move |x| f(x, y))).collect();
+        Texture::from_srgb8("t", w, h, &rgb).unwrap()
+    }
+
+    #[test]
+    fn srgb_decoding_is_the_standard_curve() {
+        assert_eq!(srgb_to_linear(0), 0.0);
+        assert_eq!(srgb_to_linear(255), 1.0);
+        assert!((srgb_to_linear(188) - 0.5029).abs() < 1e-3);
+        assert!((srgb_to_linear(10) - 10.0 / 255.0 / 12.92).abs() < 1e-7);
+    }
+
+    #[test]
+    fn mip_chain_halves_odd_sides_and_averages_in_linear_light() {
+        let t = tex(5, 3, |x, _| if x % 2 == 0 { [255, 255, 255] } else { [0, 0, 0] });
+        let sizes: Vec<(u32, u32)> = t.levels.iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, [(5, 3), (2, 1), (1, 1)]);
+        // Level 1's last texel covers columns 2, 3 and 4 (odd width) of all three rows: 2/3
+        // white in linear light, not in sRGB.
+        assert!((t.levels[1].texels[1].x - 2.0 / 3.0).abs() < 1e-6);
+        assert!((t.levels[1].texels[0].x - 0.5).abs() < 1e-6);
+        // The next level averages level 1's two texels (not all 15 of level 0's).
+        assert!((t.levels[2].texels[0].x - (0.5 + 2.0 / 3.0) / 2.0).abs() < 1e-6);
+        assert!(Texture::from_srgb8("e", 0, 4, &[]).is_none());
+        assert!(Texture::from_srgb8("short", 2, 2, &[0; 11]).is_none());
+    }
+
+    #[test]
+    fn sampling_reads_texel_centres_exactly_and_repeats() {
+        let t = tex(4, 2, |x, y| [(x * 60) as u8, (y * 200) as u8, 7]);
+        for y in 0..2 {
+            for x in 0..4 {
+                let uv = Vec2::new((x as f32 + 0.5) / 4.0, (y as f32 + 0.5) / 2.0);
+                let want = Vec3::new(
+                    srgb_to_linear((x * 60) as u8),
+                    srgb_to_linear((y * 200) as u8),
+                    srgb_to_linear(7),
+                );
+                assert_eq!(t.sample(uv, 0.0), want);
+                assert_eq!(t.sample(uv + Vec2::new(3.0, -2.0), 0.0), want, "repeat");
+            }
+        }
+        // Half-way between the last column and the first (wrapping).
+        let mid = t.sample(Vec2::new(1.0, 0.25), 0.0);
+        assert!((mid.x - 0.5 * srgb_to_linear(180)).abs() < 1e-6);
+        assert_eq!(t.sample(Vec2::new(f32::NAN, 0.5), 0.0), t.levels[0].texels[0]);
+    }
+
+    #[test]
+    fn the_level_matches_the_footprint() {
+        let t = tex(64, 16, |_, _| [1, 2, 3]);
+        assert_eq!(t.levels(), 7);
+        // One texel of 64 per side is 1/64 of the coordinates: level 0 up to (not at) 2 texels.
+        assert_eq!(t.level_for(0.0), 0);
+        assert_eq!(t.level_for(f32::NAN), 0);
+        assert_eq!(t.level_for(1.9 / 64.0), 0);
+        assert_eq!(t.level_for(2.0 / 64.0), 1);
+        assert_eq!(t.level_for(7.9 / 64.0), 2);
+        assert_eq!(t.level_for(8.0 / 64.0), 3);
+        assert_eq!(t.level_for(1e9), 6);
+        assert_eq!(t.level_for(f32::INFINITY), 6);
+    }
+
+    #[test]
+    fn footprint_and_texture_density() {
+        let p = [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)];
+        let uv = [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)];
+        assert!((uv_per_world(&p, &uv) - 0.5).abs() < 1e-6);
+        assert_eq!(uv_per_world(&[Vec3::ZERO; 3], &uv), 0.0);
+        assert!((footprint(10.0, 0.001, 1.0, 0.5) - 0.005).abs() < 1e-9);
+        assert!((footprint(10.0, 0.001, 0.25, 0.5) - 0.01).abs() < 1e-9);
+        assert_eq!(footprint(10.0, 0.001, 0.0, 0.5), footprint(10.0, 0.001, 1.0 / 64.0, 0.5));
+    }
+}

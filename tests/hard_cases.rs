@@ -23,7 +23,7 @@ fn wall_with_light_in_plane(corners: [Vec3; 4], light: Vec3, eye: Vec3) -> Scene
     let m = s.add_material(Material::matte("wall", Vec3::splat(0.8)));
     s.push_quad(corners, m);
     let centre = corners.iter().copied().sum::<Vec3>() / 4.0;
-    s.lights = vec![PointLight { position: light, intensity: Vec3::splat(50.0) }];
+    s.lights = vec![PointLight { position: light, intensity: Vec3::splat(50.0), spot: None }];
     s.camera = Some(Camera::look_at(eye, centre, Vec3::Y, 50.0));
     s.settings = settings(96, 96);
     s.validate().unwrap();
@@ -133,7 +133,7 @@ fn grille() -> Scene {
         [vec3(-3.0, 0.0, -3.0), vec3(-3.0, 0.0, 3.0), vec3(3.0, 0.0, 3.0), vec3(3.0, 0.0, -3.0)],
         floor,
     );
-    s.lights = vec![PointLight { position: vec3(-2.0, 2.0, 1.0), intensity: Vec3::splat(20.0) }];
+    s.lights = vec![PointLight { position: vec3(-2.0, 2.0, 1.0), intensity: Vec3::splat(20.0), spot: None }];
     s.camera = Some(Camera::look_at(vec3(-3.1, 1.2, 0.4), vec3(0.0, 0.2, 0.0), Vec3::Y, 30.0));
     s.settings = settings(160, 120);
     s.validate().unwrap();
@@ -214,8 +214,12 @@ fn scaled_room(offset: Vec3, k: f32) -> Scene {
     boxed(vec3(-1.9, 0.0, 0.8), vec3(-1.5, 0.9, 1.1), grey);
     boxed(vec3(-0.3, 0.76, -0.2), vec3(-0.1, 0.86, 0.0), grey);
     s.lights = vec![
-        PointLight { position: o + vec3(0.4, 2.2, 0.9) * k, intensity: Vec3::splat(3.0 * k * k) },
-        PointLight { position: o + vec3(-1.2, 1.8, -0.7) * k, intensity: Vec3::splat(2.0 * k * k) },
+        PointLight { position: o + vec3(0.4, 2.2, 0.9) * k, intensity: Vec3::splat(3.0 * k * k), spot: None },
+        PointLight {
+            position: o + vec3(-1.2, 1.8, -0.7) * k,
+            intensity: Vec3::splat(2.0 * k * k),
+            spot: None,
+        },
     ];
     s.camera =
         Some(Camera::look_at(o + vec3(2.2, 2.0, 3.4) * k, o + vec3(-0.2, 0.4, -0.2) * k, Vec3::Y, 50.0));

@@ -39,7 +39,7 @@ fn closed_sphere() -> (Scene, f32, f32) {
     let mut s = Scene::new("sphere");
     let m = s.add_material(Material::matte("wall", Vec3::splat(rho)));
     push_sphere(&mut s, radius, 192, m);
-    s.lights = vec![PointLight { position: Vec3::ZERO, intensity: Vec3::splat(intensity) }];
+    s.lights = vec![PointLight { position: Vec3::ZERO, intensity: Vec3::splat(intensity), spot: None }];
     s.camera = Some(Camera::look_at(vec3(0.0, 0.3, 0.5), vec3(1.0, 0.1, -3.0), Vec3::Y, 70.0));
     s.settings = Settings { width: 96, height: 72, max_depth: 0, exposure: 1.0 };
     s.validate().unwrap();
@@ -193,7 +193,7 @@ fn light_that_reaches_no_visible_surface_adds_nothing() {
     let mut s = floor_scene(3.0, Vec3::splat(0.5), 4.0, 60.0, vec![], 48, 48);
     let m = s.add_material(Material::matte("box", Vec3::splat(0.8)));
     push_box(&mut s, vec3(-0.5, 0.5, -0.5), vec3(0.5, 1.5, 0.5), m);
-    s.lights = vec![PointLight { position: vec3(0.0, 1.0, 0.0), intensity: Vec3::splat(5.0) }];
+    s.lights = vec![PointLight { position: vec3(0.0, 1.0, 0.0), intensity: Vec3::splat(5.0), spot: None }];
     s.validate().unwrap();
     for ind in [Indirect::Rays, Indirect::Maps] {
         let f = render(&s, options(ind, 64, 0.01));
@@ -268,7 +268,8 @@ fn vpls_near_walls_and_on_the_paraboloid_rim() {
         [vec3(-1.9, 0.0, -1.0), vec3(-0.5, 0.0, -1.0), vec3(-0.5, 0.6, -1.0), vec3(-1.9, 0.6, -1.0)],
         m,
     );
-    s.lights = vec![PointLight { position: vec3(-1.98, 0.02, -1.98), intensity: Vec3::splat(3.0) }];
+    s.lights =
+        vec![PointLight { position: vec3(-1.98, 0.02, -1.98), intensity: Vec3::splat(3.0), spot: None }];
     s.camera = Some(Camera::look_at(vec3(1.5, 2.2, 1.8), vec3(-1.0, 0.5, -1.0), Vec3::Y, 70.0));
     s.validate().unwrap();
     let (rays, _) = indirect_only(&s, options(Indirect::Rays, 200, 0.01));
@@ -348,7 +349,7 @@ fn vpls_on_thin_slats() {
         [vec3(-2.0, 0.0, -1.2), vec3(2.0, 0.0, -1.2), vec3(2.0, 2.5, -1.2), vec3(-2.0, 2.5, -1.2)],
         wall,
     );
-    s.lights = vec![PointLight { position: vec3(0.3, 1.8, 0.2), intensity: Vec3::splat(3.0) }];
+    s.lights = vec![PointLight { position: vec3(0.3, 1.8, 0.2), intensity: Vec3::splat(3.0), spot: None }];
     s.camera = Some(Camera::look_at(vec3(0.8, 1.5, 2.5), vec3(0.0, 1.0, -1.2), Vec3::Y, 60.0));
     s.validate().unwrap();
     let (rays, f) = indirect_only(&s, options(Indirect::Rays, 200, 0.01));

@@ -656,7 +656,7 @@ fn gltf_with_cameras_and_lights() -> String {
 }
 
 /// glTF cameras placed by their nodes (the parent's transform too) and point lights in W/sr
-/// (candela / 683, times the colour); what hyrt has no model for is skipped with a warning
+/// (candela / 683, times the colour) and spot lights; what hyrt has no model for is skipped with a warning
 /// that names it.
 #[test]
 fn gltf_cameras_and_lights() {
@@ -673,14 +673,19 @@ fn gltf_cameras_and_lights() {
     assert!(close(c.camera.up.normalize(), Vec3::Y), "{:?}", c.camera.up);
     assert!((c.camera.fov_y_deg - 0.5f32.to_degrees()).abs() < 1e-4);
     assert_eq!(c.aspect, Some(2.0));
-    assert_eq!(m.lights.len(), 1);
+    assert_eq!(m.lights.len(), 2);
     assert_eq!(m.lights[0].position, Vec3::new(0.0, 5.0, 0.0));
     assert!(close(m.lights[0].intensity, Vec3::new(1.0, 0.5, 0.25)), "{:?}", m.lights[0].intensity);
+    assert!(m.lights[0].spot.is_none());
+    // The spot shines down its node's -Z, its cone's half-angles in radians.
+    let spot = m.lights[1].spot.unwrap();
+    assert_eq!(spot.axis, Vec3::NEG_Z);
+    assert!((spot.cos_inner - 0.1f32.cos()).abs() < 1e-6 && (spot.cos_outer - 0.5f32.cos()).abs() < 1e-6);
+    assert!(close(m.lights[1].intensity, Vec3::splat(10.0 / 683.0)));
     let warnings = m.warnings.join("\n");
     for part in [
         "camera 1 is orthographic",
         "camera 2 'spare' is placed by no node",
-        "light 1 is a spot light",
         "light 2 is a directional light",
     ] {
         assert!(warnings.contains(part), "{warnings:?} should mention {part:?}");
@@ -693,9 +698,9 @@ fn gltf_cameras_and_lights() {
     let s = scene::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.camera, Some(c.camera));
     assert_eq!((s.settings.width, s.settings.height), (640, 320));
-    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.lights.len(), 2);
     assert!(s.settings.exposure > 0.0 && s.settings.exposure.is_finite() && s.settings.exposure != 1.0);
-    assert_eq!(s.warnings.len(), 4);
+    assert_eq!(s.warnings.len(), 3);
     let o = scene::Overrides { camera: Some(1), ..Default::default() };
     assert_contains(
         &err_text(scene::load_with(p.to_str().unwrap(), o)),
@@ -729,9 +734,9 @@ fn toml_with_gltf_cameras_and_lights() {
     let cam = s.camera.unwrap();
     assert!((cam.eye - Vec3::new(101.0, 2.0, 13.0)).length() < 1e-4, "{:?}", cam.eye);
     assert_eq!((s.settings.width, s.settings.height), (640, 320));
-    assert_eq!(s.lights.len(), 2);
+    assert_eq!(s.lights.len(), 3);
     assert_eq!(s.lights[0].position, Vec3::new(100.0, 5.0, 0.0));
-    assert_eq!(s.lights[1].intensity, Vec3::splat(2.0));
+    assert_eq!(s.lights[2].intensity, Vec3::splat(2.0));
     // The file's exposure stays as written (the default).
     assert_eq!(s.settings.exposure, 1.0);
 

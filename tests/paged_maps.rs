@@ -40,7 +40,7 @@ const MAX_WRONG_FRACTION: f64 = 0.0005;
 const MIN_PSNR_DB: f64 = 50.0;
 
 fn light(p: Vec3, i: f32) -> PointLight {
-    PointLight { position: p, intensity: Vec3::splat(i) }
+    PointLight { position: p, intensity: Vec3::splat(i), spot: None }
 }
 
 /// From the scene's centre towards the far light: a low sun, 25 degrees above the ground,

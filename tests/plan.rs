@@ -24,7 +24,7 @@ fn decision<'a>(d: &'a [FrameDecision], what: &str) -> &'a FrameDecision {
 }
 
 fn light(position: Vec3, intensity: f32) -> PointLight {
-    PointLight { position, intensity: Vec3::splat(intensity) }
+    PointLight { position, intensity: Vec3::splat(intensity), spot: None }
 }
 
 /// No mirror material: no reflection pass and no specular rays. With one (the built-in

@@ -17,7 +17,7 @@ use hyrt::{
 #[test]
 fn single_square_radiance_matches_the_formula() {
     let kd = vec3(0.8, 0.5, 0.25);
-    let light = PointLight { position: vec3(0.3, 1.5, -0.2), intensity: vec3(2.0, 1.0, 0.5) };
+    let light = PointLight { position: vec3(0.3, 1.5, -0.2), intensity: vec3(2.0, 1.0, 0.5), spot: None };
     let (w, h) = (64u32, 48u32);
     let scene = floor_scene(1.0, kd, 3.0, 40.0, vec![light], w, h);
     let frame = render(&scene, Options::default());
@@ -55,7 +55,7 @@ fn single_square_radiance_matches_the_formula() {
 #[test]
 fn highlight_radiance_matches_the_formula() {
     let (kd, ks, ns) = (vec3(0.5, 0.4, 0.3), vec3(0.3, 0.2, 0.1), 50.0f32);
-    let light = PointLight { position: vec3(1.0, 1.0, 0.0), intensity: vec3(2.0, 1.0, 0.5) };
+    let light = PointLight { position: vec3(1.0, 1.0, 0.0), intensity: vec3(2.0, 1.0, 0.5), spot: None };
     // Odd size: the centre pixel's ray goes through the target.
     let (w, h) = (33u32, 33u32);
     let mut scene = floor_scene(1.0, kd, 3.0, 40.0, vec![light], w, h);
@@ -110,9 +110,9 @@ fn highlight_radiance_matches_the_formula() {
 #[test]
 fn ray_counts_match_a_hand_count() {
     let lights = vec![
-        PointLight { position: vec3(0.0, 2.0, 0.0), intensity: Vec3::ONE },
-        PointLight { position: vec3(0.5, 1.0, 0.5), intensity: Vec3::ONE },
-        PointLight { position: vec3(-3.0, 0.5, 0.2), intensity: Vec3::ONE },
+        PointLight { position: vec3(0.0, 2.0, 0.0), intensity: Vec3::ONE, spot: None },
+        PointLight { position: vec3(0.5, 1.0, 0.5), intensity: Vec3::ONE, spot: None },
+        PointLight { position: vec3(-3.0, 0.5, 0.2), intensity: Vec3::ONE, spot: None },
     ];
     let (w, h) = (40u32, 30u32);
     // A square of half-size 0.61 seen from height 2 with a 60 degree fov: partly covered.
@@ -140,7 +140,7 @@ fn ray_counts_match_a_hand_count() {
 /// Mirror rays: a camera looking at a mirror floor with a diffuse wall behind the camera.
 #[test]
 fn specular_rays_are_cast_only_when_a_mirror_is_seen() {
-    let lights = vec![PointLight { position: vec3(0.0, 2.0, 0.0), intensity: Vec3::ONE }];
+    let lights = vec![PointLight { position: vec3(0.0, 2.0, 0.0), intensity: Vec3::ONE, spot: None }];
     let mut scene = floor_scene(1.0, Vec3::splat(0.5), 2.0, 30.0, lights, 16, 16);
     let r = render(&scene, Options::default());
     assert_eq!(r.stats.rays.specular, 0);

@@ -59,7 +59,7 @@ fn scene(name: &str, lights: Vec<PointLight>, cam: Camera, size: (u32, u32)) -> 
 }
 
 fn light(p: Vec3, i: f32) -> PointLight {
-    PointLight { position: p, intensity: Vec3::splat(i) }
+    PointLight { position: p, intensity: Vec3::splat(i), spot: None }
 }
 
 /// Renders `s` with the reference and with `opts`; returns both frames.

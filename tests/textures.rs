@@ -90,6 +90,7 @@ fn checker_scene(dir: &Path, n: u32, d: f32, size: u32) -> scene::Scene {
     s.lights = vec![PointLight {
         position: vec3(0.0, 0.0, d),
         intensity: Vec3::splat(std::f32::consts::PI * d * d),
+        spot: None,
     }];
     (s.settings.width, s.settings.height) = (size, size);
     s

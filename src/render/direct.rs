@@ -102,7 +102,7 @@ pub(crate) fn reflect(
     let (mut sum, mut lobe_sum) = (Vec3::ZERO, Vec3::ZERO);
     for (l, light) in r.lights.iter().enumerate() {
         let Some((wi, cos, d2)) = lit(l, light) else { continue };
-        let e = light.intensity * (cos / d2);
+        let e = light.intensity_towards(-wi) * (cos / d2);
         sum += e;
         if highlight {
             lobe_sum += e * m.highlight_lobe(hit.ns, wi, hit.wo);

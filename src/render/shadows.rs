@@ -115,6 +115,14 @@ impl PlaneSides {
     }
 }
 
+/// Whether unit direction `d` from a spot light lies outside its cone by more than a margin:
+/// marking samples every few pixels and counts on a receiver's neighbours needing its pages,
+/// so it stops a little beyond the cone (a page it misses is decided by a ray all the same).
+fn outside_with_margin(s: &crate::scene::Spot, d: Vec3) -> bool {
+    // 0.05 of the cosine: a few degrees for wide cones, more for narrow ones.
+    s.axis.dot(d) < s.cos_outer - 0.05
+}
+
 /// The part of [`facing`] that does not ask the side of the plane: `Some((wi, cos, d2))` for
 /// a light with some intensity, not at the point, in front of the shading normal. Passes that
 /// already know that the light faces the point (a map decision was made for it) use this alone.
@@ -132,11 +140,15 @@ fn light_geometry_and_terms(hit: &SurfaceHit, light: &PointLight) -> (Option<(Ve
     // `length()` is `length_squared().sqrt()`: the terms are `LightTerms::of`'s.
     let r = d2.sqrt();
     let terms = LightTerms::of_offset(hit.ng, to_light, r);
-    // A dark light adds nothing: no ray, no map (the plan says so).
+    // A dark light adds nothing: no ray, no map (the plan says so); nor does a spot light
+    // outside its cone.
     if light.intensity.max_element() <= 0.0 || d2 == 0.0 {
         return (None, terms);
     }
     let wi = to_light / r;
+    if light.dark_towards(-wi) {
+        return (None, terms);
+    }
     let cos = hit.ns.dot(wi);
     ((cos > 0.0).then_some((wi, cos, d2)), terms)
 }
@@ -558,6 +570,7 @@ impl Renderer<'_> {
                         let side = ng.dot(v);
                         if light.intensity.max_element() <= 0.0
                             || (side * view < 0.0 && side.abs() > 1e-4 * v.length())
+                            || light.spot.is_some_and(|s| outside_with_margin(&s, -v.normalize_or_zero()))
                         {
                             continue;
                         }

@@ -75,6 +75,24 @@ fn uniform_sphere((u, v): (f32, f32)) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// A unit direction uniform over the cone of directions within `acos(cos_max)` of the unit
+/// `axis` (solid angle `2 pi (1 - cos_max)`): `cos = 1 - u (1 - cos_max)`.
+fn uniform_cone(axis: Vec3, cos_max: f32, (u, v): (f32, f32)) -> Vec3 {
+    let z = 1.0 - u * (1.0 - cos_max);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * v;
+    let (b1, b2) = axis.any_orthonormal_pair();
+    (b1 * (r * phi.cos()) + b2 * (r * phi.sin()) + axis * z).normalize()
+}
+
+/// The solid angle a light sends light into: the sphere's `4 pi`, or a spot's outer cone.
+fn emitting_solid_angle(light: &PointLight) -> f32 {
+    match light.spot {
+        None => 4.0 * std::f32::consts::PI,
+        Some(s) => std::f32::consts::TAU * (1.0 - s.cos_outer),
+    }
+}
+
 /// A unit direction around `n`, cosine-distributed (Malley: a uniform disc point lifted).
 fn cosine_hemisphere(n: Vec3, (u, v): (f32, f32)) -> Vec3 {
     let r = u.sqrt();
@@ -87,7 +105,18 @@ fn cosine_hemisphere(n: Vec3, (u, v): (f32, f32)) -> Vec3 {
 /// Paths per light, proportional to the lights' power (largest remainder, ties to the first
 /// light), so that every path carries about the same flux.
 fn paths_per_light(lights: &[PointLight], total: u32) -> Vec<u32> {
-    let power: Vec<f64> = lights.iter().map(|l| f64::from(l.intensity.max_element().max(0.0))).collect();
+    // A spot light's power is bounded by its axis intensity over its outer cone.
+    let power: Vec<f64> = lights
+        .iter()
+        .map(|l| {
+            let p = f64::from(l.intensity.max_element().max(0.0));
+            if l.spot.is_some() {
+                p * f64::from(emitting_solid_angle(l)) / (4.0 * std::f64::consts::PI)
+            } else {
+                p
+            }
+        })
+        .collect();
     let sum: f64 = power.iter().sum();
     if sum <= 0.0 || total == 0 {
         return vec![0; power.len()];
@@ -147,11 +176,22 @@ pub fn generate_from(
             let light = &lights[l];
             let n = per_light[l];
             let index = u64::from(opts.seed) * u64::from(n) + u64::from(k);
-            let mut flux = light.intensity * (4.0 * std::f32::consts::PI / n as f32);
+            // A point light's paths leave uniformly over the sphere, a spot light's over its
+            // outer cone, each carrying the intensity it sends that way times its share of the
+            // solid angle.
+            let (mut flux, dir) = match light.spot {
+                None => (
+                    light.intensity * (4.0 * std::f32::consts::PI / n as f32),
+                    uniform_sphere(halton2(index, 0)),
+                ),
+                Some(s) => {
+                    let d = uniform_cone(s.axis, s.cos_outer, halton2(index, 0));
+                    (light.intensity_towards(d) * (emitting_solid_angle(light) / n as f32), d)
+                }
+            };
             let mut counts = RayCounts::default();
             let mut vpls = Vec::new();
-            let mut ray =
-                hyrt_tracer::Ray::new(light.position, uniform_sphere(halton2(index, 0)), f32::INFINITY);
+            let mut ray = hyrt_tracer::Ray::new(light.position, dir, f32::INFINITY);
             let (mut dim, mut mirror_bounces) = (1, 0);
             while (vpls.len() as u32) < opts.bounces {
                 let Some(h) = tracer.closest_hit(&ray, RayKind::VplPath, &mut counts) else { break };
@@ -227,7 +267,11 @@ mod tests {
     fn paths_follow_the_lights_power() {
         let mut s = Scene::new("t");
         for i in [1.0, 3.0, 0.0] {
-            s.lights.push(crate::scene::PointLight { position: Vec3::ZERO, intensity: Vec3::splat(i) });
+            s.lights.push(crate::scene::PointLight {
+                position: Vec3::ZERO,
+                intensity: Vec3::splat(i),
+                spot: None,
+            });
         }
         assert_eq!(paths_per_light(&s.lights, 45), [11, 34, 0]);
         assert_eq!(paths_per_light(&s.lights, 1), [0, 1, 0]);

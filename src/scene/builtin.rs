@@ -116,7 +116,7 @@ pub fn cornell() -> Scene {
     // Two lights 9 cm under the ceiling lamp (130 x 105 mm, centred at x 278, z 279.5), as
     // far below the ceiling, relative to the box, as the thesis scene's lights.
     for (x, z) in [(245.0, 255.0), (311.0, 304.0)] {
-        s.lights.push(PointLight { position: mm(x, 458.0, z), intensity: Vec3::splat(0.25) });
+        s.lights.push(PointLight { position: mm(x, 458.0, z), intensity: Vec3::splat(0.25), spot: None });
     }
     s.camera = Some(Camera::look_at(mm(278.0, 273.0, -800.0), mm(278.0, 273.0, 0.0), Vec3::Y, 39.3077));
     s.settings = Settings { width: 512, height: 512, ..Settings::default() };

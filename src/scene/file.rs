@@ -43,6 +43,14 @@
 //! [[light]]                              # zero or more point lights
 //! position = [0.0, 1.9, -0.03]
 //! intensity = [0.6, 0.6, 0.6]            # W/sr, number or [r, g, b]
+//!
+//! [[light]]                              # a spot light
+//! kind = "spot"                          # "point" (the default) or "spot"
+//! position = [0.0, 1.9, 0.0]
+//! direction = [0.0, -1.0, 0.0]           # the way it shines (need not be normalised)
+//! inner_angle = 15.0                     # degrees from the axis at full intensity (default 0)
+//! outer_angle = 30.0                     # degrees from the axis beyond which it is dark
+//! intensity = 2.0                        # W/sr on the axis
 //! ```
 //!
 //! Rules:
@@ -82,7 +90,14 @@
 //!   file as the reason the material reflects). Colours are a number (grey) or `[r, g, b]`,
 //!   finite and `>= 0`, and `shininess` finite and `>= 0`. A name that matches no material is
 //!   an error. Overrides are applied in file order after all meshes are loaded.
-//! - `[[light]]`: an isotropic point light; a single number for `intensity` means grey.
+//! - `[[light]]`: an isotropic point light; a single number for `intensity` means grey. With
+//!   `kind = "spot"`, a spot light: the point light's intensity (now on the axis) times
+//!   1 within `inner_angle` of `direction`, 0 beyond `outer_angle`, and between them the smooth
+//!   ramp glTF recommends, `t^2` with `t = (cos a - cos outer) / (cos inner - cos outer)`;
+//!   `0 <= inner_angle <= outer_angle <= 90`. Points outside the cone get neither a map
+//!   decision nor a shadow ray, and VPL paths leave into the cone only. `kind = "directional"`
+//!   is an error for now (no directional lights yet); a spot's keys on a point light are an
+//!   error too.
 //!
 //! Errors name the scene file, with a line number where one is known (the TOML parser's
 //! messages include line and column); an error inside a mesh file names both files.
@@ -113,7 +128,7 @@ struct SceneFile {
     #[serde(default)]
     material: Vec<Spanned<MaterialSpec>>,
     #[serde(default)]
-    light: Vec<LightSpec>,
+    light: Vec<Spanned<LightSpec>>,
 }
 
 #[derive(Deserialize)]
@@ -169,8 +184,48 @@ struct MaterialSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightSpec {
+    /// `point` (the default) or `spot`.
+    kind: Option<String>,
     position: V3,
     intensity: Splat3,
+    /// Spot lights: the axis (the way the light shines) and the cone's half-angles in degrees.
+    direction: Option<V3>,
+    inner_angle: Option<f32>,
+    outer_angle: Option<f32>,
+}
+
+impl LightSpec {
+    /// The light, or why the table does not make one.
+    fn light(&self) -> std::result::Result<PointLight, String> {
+        let light = PointLight { position: self.position.0, intensity: self.intensity.0, spot: None };
+        let spot_keys = self.direction.is_some() || self.inner_angle.is_some() || self.outer_angle.is_some();
+        match self.kind.as_deref().unwrap_or("point") {
+            "point" if spot_keys => {
+                Err("'direction', 'inner_angle' and 'outer_angle' belong to kind = \"spot\"".to_string())
+            }
+            "point" => Ok(light),
+            "spot" => {
+                let (Some(d), Some(outer)) = (self.direction, self.outer_angle) else {
+                    return Err("a spot light needs 'direction' and 'outer_angle'".to_string());
+                };
+                let inner = self.inner_angle.unwrap_or(0.0);
+                if !(0.0..=90.0).contains(&outer) || !(0.0..=outer).contains(&inner) {
+                    return Err(format!(
+                        "a spot light's angles must satisfy 0 <= inner_angle <= outer_angle <= 90 degrees, got {inner} and {outer}"
+                    ));
+                }
+                if !(d.0.is_finite() && d.0 != Vec3::ZERO) {
+                    return Err("a spot light's 'direction' must be a finite, non-zero vector".to_string());
+                }
+                let spot = super::Spot::new(d.0, inner.to_radians(), outer.to_radians());
+                Ok(PointLight { spot: Some(spot), ..light })
+            }
+            "directional" => {
+                Err("directional lights are not supported yet (hyrt has point and spot lights)".to_string())
+            }
+            other => Err(format!("unknown light kind '{other}' (expected \"point\" or \"spot\")")),
+        }
+    }
 }
 
 /// An `[x, y, z]` array of exactly three numbers. (serde's `[f32; 3]` would silently ignore
@@ -330,9 +385,11 @@ pub fn load(path: &Path) -> Result<Scene> {
         }
     }
 
-    scene
-        .lights
-        .extend(file.light.iter().map(|l| PointLight { position: l.position.0, intensity: l.intensity.0 }));
+    for spec in &file.light {
+        let light =
+            spec.get_ref().light().map_err(|e| anyhow::anyhow!("{}: [[light]]: {e}", at(spec.span())))?;
+        scene.lights.push(light);
+    }
 
     if let Some(s) = &file.settings {
         let d = &mut scene.settings;

@@ -19,8 +19,10 @@
 //! in candela (lumens per steradian); hyrt's lights are radiometric, in watts per steradian,
 //! so it is divided by 683 lm/W (the luminous efficacy that defines the candela, of light of
 //! 555 nm) and multiplied by the light's linear `color`. `range` is ignored: light falls off
-//! with the square of the distance alone, as the specification allows. Spot and directional
-//! lights are skipped with a warning (hyrt has point lights only).
+//! with the square of the distance alone, as the specification allows. Spot lights shine down
+//! their node's -Z with the cone's `innerConeAngle` and `outerConeAngle` (and the smooth
+//! falloff between them that the specification recommends, `Spot`). Directional lights are
+//! skipped with a warning (hyrt has point and spot lights).
 //!
 //! The crate is built without its `import` feature, so buffers are resolved here: the GLB binary
 //! chunk, external files relative to the glTF file, and base64 `data:` URIs. Every accessor is
@@ -37,7 +39,7 @@ use gltf::mesh::{Mode, Semantic};
 
 use super::obj::{read_bytes, unit_normals};
 use super::texture::Texture;
-use super::{Camera, FileCamera, Material, MeshData, MeshRange, PointLight};
+use super::{Camera, FileCamera, Material, MeshData, MeshRange, PointLight, Spot};
 
 /// Diffuse colour of the material given to primitives without one.
 const DEFAULT_KD: Vec3 = Vec3::splat(0.8);
@@ -337,18 +339,22 @@ impl Loader<'_> {
             Some(n) => format!("light {} '{n}'", light.index()),
             None => format!("light {}", light.index()),
         };
-        let kind = match light.kind() {
-            Kind::Point => {
-                let intensity = Vec3::from(light.color()) * (light.intensity() / LUMENS_PER_WATT);
-                self.mesh.lights.push(PointLight { position: world.transform_point3(Vec3::ZERO), intensity });
+        let intensity = Vec3::from(light.color()) * (light.intensity() / LUMENS_PER_WATT);
+        let position = world.transform_point3(Vec3::ZERO);
+        let spot = match light.kind() {
+            Kind::Point => None,
+            Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                Some(Spot::new(world.transform_vector3(Vec3::NEG_Z), inner_cone_angle, outer_cone_angle))
+            }
+            Kind::Directional => {
+                self.mesh.warnings.push(format!(
+                    "{}: {name} is a directional light (hyrt has point and spot lights): skipped",
+                    self.path.display()
+                ));
                 return;
             }
-            Kind::Spot { .. } => "a spot light",
-            Kind::Directional => "a directional light",
         };
-        self.mesh
-            .warnings
-            .push(format!("{}: {name} is {kind} (hyrt has point lights only): skipped", self.path.display()));
+        self.mesh.lights.push(PointLight { position, intensity, spot });
     }
 
     /// Appends one instance of `mesh` (all its triangle primitives) placed by `world`.

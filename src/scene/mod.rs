@@ -19,12 +19,70 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, bail};
 use glam::{Mat4, Vec2, Vec3};
 
-/// An isotropic point light.
+/// A point light: isotropic, or a spot light shining into a cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointLight {
     pub position: Vec3,
-    /// Radiant intensity in W/sr per RGB channel.
+    /// Radiant intensity in W/sr per RGB channel (on the cone's axis for a spot light).
     pub intensity: Vec3,
+    /// The cone of a spot light; `None`: every direction alike.
+    pub spot: Option<Spot>,
+}
+
+impl PointLight {
+    /// The intensity sent along unit direction `d` from the light: `intensity`, times the
+    /// spot's [`Spot::factor`] for a spot light (exactly `intensity` for a point light).
+    #[inline]
+    pub fn intensity_towards(&self, d: Vec3) -> Vec3 {
+        match &self.spot {
+            None => self.intensity,
+            Some(s) => self.intensity * s.factor(d),
+        }
+    }
+
+    /// Whether the light sends nothing along unit direction `d` (outside a spot's cone).
+    #[inline]
+    pub fn dark_towards(&self, d: Vec3) -> bool {
+        self.spot.is_some_and(|s| s.factor(d) <= 0.0)
+    }
+}
+
+/// The cone of a spot light (a point light whose intensity falls off away from an axis).
+///
+/// Full intensity within `inner` of the axis, none beyond `outer`, and between them the ramp
+/// that glTF's `KHR_lights_punctual` recommends: `t^2` with `t = (cos a - cos outer) / (cos
+/// inner - cos outer)`, `a` the angle from the axis (linear in the cosine, squared, so that it
+/// starts and ends smoothly enough for the eye and costs one dot product).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    /// Unit direction of the axis: the way the light shines.
+    pub axis: Vec3,
+    /// Cosine of the inner half-angle.
+    pub cos_inner: f32,
+    /// Cosine of the outer half-angle (at most `cos_inner`).
+    pub cos_outer: f32,
+}
+
+impl Spot {
+    /// The cone around `axis` (any length) with half-angles `inner` and `outer` (radians);
+    /// `outer` is at least `inner`.
+    pub fn new(axis: Vec3, inner: f32, outer: f32) -> Self {
+        Self { axis: axis.normalize_or_zero(), cos_inner: inner.cos(), cos_outer: outer.max(inner).cos() }
+    }
+
+    /// The fraction of the axis's intensity sent along unit direction `d` (type docs).
+    #[inline]
+    pub fn factor(&self, d: Vec3) -> f32 {
+        let c = self.axis.dot(d);
+        if c >= self.cos_inner {
+            1.0
+        } else if c <= self.cos_outer {
+            0.0
+        } else {
+            let t = (c - self.cos_outer) / (self.cos_inner - self.cos_outer);
+            t * t
+        }
+    }
 }
 
 /// A pinhole camera. The field of view is vertical; `fov_x_deg`, when given (as the Radiance
@@ -342,7 +400,11 @@ impl Scene {
             let up = camera.up.normalize_or(Vec3::Y);
             let pos = camera.eye + up * radius * 0.5;
             let d2 = (pos - centre).length_squared();
-            self.lights.push(PointLight { position: pos, intensity: Vec3::splat(std::f32::consts::PI * d2) });
+            self.lights.push(PointLight {
+                position: pos,
+                intensity: Vec3::splat(std::f32::consts::PI * d2),
+                spot: None,
+            });
         }
     }
 
@@ -365,6 +427,15 @@ impl Scene {
         for (i, l) in self.lights.iter().enumerate() {
             if !l.position.is_finite() || !l.intensity.is_finite() || l.intensity.min_element() < 0.0 {
                 bail!("{origin}: light {i} has a non-finite position or a negative/non-finite intensity");
+            }
+            if let Some(s) = l.spot
+                && !(s.axis.is_finite()
+                    && s.axis != Vec3::ZERO
+                    && s.cos_outer.is_finite()
+                    && s.cos_inner.is_finite()
+                    && s.cos_inner >= s.cos_outer)
+            {
+                bail!("{origin}: spot light {i} has no direction or a non-finite cone");
             }
         }
         for m in &self.materials {

@@ -16,7 +16,8 @@ fn main() -> anyhow::Result<()> {
     let scene = args.next().unwrap_or_else(|| "scenes/conference.toml".into());
     let out = args.next().unwrap_or_else(|| "docs/inspector-flight.png".into());
     let steps: u32 = args.next().map_or(Ok(24), |s| s.parse())?;
-    let setup = Setup { scene, size: None, max_depth: None, knobs: Default::default(), options: None };
+    let setup =
+        Setup { scene, size: None, max_depth: None, camera: None, knobs: Default::default(), options: None };
     let mut h = Harness::builder()
         .with_size(Vec2::new(1500.0, 920.0))
         .with_max_steps(50)

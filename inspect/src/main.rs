@@ -22,6 +22,9 @@ struct Args {
     /// Maximum mirror bounces, overriding the scene's.
     #[arg(long, value_name = "N")]
     max_depth: Option<u32>,
+    /// View through camera N of the scene's glTF files (as `hyrt render --camera`).
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
     #[command(flatten)]
     knobs: Knobs,
 }
@@ -29,7 +32,14 @@ struct Args {
 fn main() -> eframe::Result {
     hyrt::process::limit_malloc_arenas();
     let a = Args::parse();
-    let setup = Setup { scene: a.scene, size: a.size, max_depth: a.max_depth, knobs: a.knobs, options: None };
+    let setup = Setup {
+        scene: a.scene,
+        size: a.size,
+        max_depth: a.max_depth,
+        camera: a.camera,
+        knobs: a.knobs,
+        options: None,
+    };
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_title("hyrt-inspect")

@@ -45,6 +45,8 @@ pub struct Setup {
     pub scene: String,
     pub size: Option<(u32, u32)>,
     pub max_depth: Option<u32>,
+    /// Camera `N` of the scene's glTF files instead of the scene's (`hyrt render --camera`).
+    pub camera: Option<usize>,
     /// The render flags (a missing `--preset` means the hybrid one here).
     pub knobs: hyrt::options::Knobs,
     /// Override of the knobs' options (tests set small maps this way).
@@ -253,8 +255,12 @@ impl Worker {
 
 /// Loads the scene with the setup's size and depth overrides, validated, and the options.
 pub fn load(setup: &Setup) -> anyhow::Result<(Scene, Options)> {
-    let overrides =
-        hyrt::scene::Overrides { size: setup.size, max_depth: setup.max_depth, ..Default::default() };
+    let overrides = hyrt::scene::Overrides {
+        size: setup.size,
+        max_depth: setup.max_depth,
+        camera: setup.camera,
+        ..Default::default()
+    };
     let scene = hyrt::scene::load_with(&setup.scene, overrides)?;
     let mut knobs = setup.knobs.clone();
     knobs.preset = knobs.preset.or(Some(hyrt::options::Preset::Hybrid));

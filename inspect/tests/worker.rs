@@ -15,6 +15,7 @@ fn setup(options: Options) -> Setup {
         scene: "cornell".into(),
         size: Some((96, 72)),
         max_depth: None,
+        camera: None,
         knobs: Default::default(),
         options: Some(options),
     }

@@ -737,6 +737,10 @@ fn toml_with_gltf_cameras_and_lights() {
     assert_eq!(s.lights.len(), 3);
     assert_eq!(s.lights[0].position, Vec3::new(100.0, 5.0, 0.0));
     assert_eq!(s.lights[2].intensity, Vec3::splat(2.0));
+    // A rotation turns a spot's axis with it: a quarter turn about +Y takes -Z to -X.
+    let p = write(dir.path(), "turned.toml", "[[mesh]]\npath = \"lit.gltf\"\nrotate = [0, 90, 0]\n");
+    let axis = file::load(&p).unwrap().lights[1].spot.unwrap().axis;
+    assert!((axis - Vec3::NEG_X).length() < 1e-6, "{axis}");
     // The file's exposure stays as written (the default).
     assert_eq!(s.settings.exposure, 1.0);
 

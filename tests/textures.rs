@@ -73,6 +73,34 @@ fn obj_textures_load_with_their_coordinates_and_missing_ones_warn() {
     assert_eq!(s.albedo(0, [0.25, 0.25, 0.5], 0.0, 1.0), Vec3::new(0.0, 0.0, 1.0));
 }
 
+/// A scene file's mirroring transform swaps two corners of every triangle (to keep them
+/// counter-clockwise): their texture coordinates follow, so each point keeps its texel.
+#[test]
+fn a_mirrored_mesh_keeps_its_texture_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    png(&dir.path().join("rgb.png"), 2, 1, |x, _| if x == 0 { [255, 0, 0] } else { [0, 0, 255] });
+    textured_obj(dir.path(), 1.0, "rgb.png");
+    let load = |scale: &str| {
+        let p = dir.path().join("m.toml");
+        std::fs::write(&p, format!("[[mesh]]\npath = \"q.obj\"\nscale = {scale}\n")).unwrap();
+        scene::file::load(&p).unwrap()
+    };
+    let (plain, mirrored) = (load("1"), load("[-1, 1, 1]"));
+    let (a, b) = (plain.uvs[0], mirrored.uvs[0]);
+    assert_eq!(b, [a[0], a[2], a[1]]);
+    // The same point of the quad, (0.5, 0.25) in its plane before the mirror: the same colour.
+    let (pa, pb) = (plain.positions[0], mirrored.positions[0]);
+    let bary_of = |t: [Vec3; 3], q: Vec3| {
+        let (e1, e2, d) = (t[1] - t[0], t[2] - t[0], q - t[0]);
+        let den = e1.x * e2.y - e1.y * e2.x;
+        let (u, v) = ((d.x * e2.y - d.y * e2.x) / den, (e1.x * d.y - e1.y * d.x) / den);
+        [1.0 - u - v, u, v]
+    };
+    let q = vec3(0.5, -0.25, 0.0);
+    let qm = vec3(-0.5, -0.25, 0.0);
+    assert_eq!(plain.albedo(0, bary_of(pa, q), 0.0, 1.0), mirrored.albedo(0, bary_of(pb, qm), 0.0, 1.0));
+}
+
 /// A quad filling the view of a camera on its axis at distance `d`, textured with an `n x n`
 /// checker, lit by a light at the camera.
 fn checker_scene(dir: &Path, n: u32, d: f32, size: u32) -> scene::Scene {

@@ -348,6 +348,9 @@ pub fn load(path: &Path) -> Result<Scene> {
                 for n in mesh.normals.iter_mut().flatten() {
                     n.swap(1, 2);
                 }
+                for uv in mesh.uvs.iter_mut().flatten() {
+                    uv.swap(1, 2);
+                }
             }
         }
         scene.add_mesh(mesh);

@@ -221,6 +221,9 @@ impl MeshData {
         }
         for l in &mut self.lights {
             l.position = m.transform_point3(l.position);
+            if let Some(s) = &mut l.spot {
+                s.axis = m.transform_vector3(s.axis).normalize_or_zero();
+            }
         }
         let n = m.inverse().transpose();
         for t in &mut self.positions {

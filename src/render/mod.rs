@@ -296,6 +296,10 @@ impl<'a> Renderer<'a> {
 
     /// The diffuse albedo at camera hit `h` of pixel `i`, as its [`SurfaceHit`] has it.
     pub(crate) fn pixel_albedo(&self, i: usize, h: &Hit) -> Vec3 {
+        let m = &self.scene.materials[self.scene.material[h.tri as usize] as usize];
+        if m.texture.is_none() {
+            return m.diffuse;
+        }
         let w = self.scene.settings.width.max(1) as usize;
         let dir = self.camera_ray((i % w) as u32, (i / w) as u32).dir;
         let tri = &self.scene.positions[h.tri as usize];

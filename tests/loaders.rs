@@ -656,7 +656,8 @@ fn gltf_with_cameras_and_lights() -> String {
 }
 
 /// glTF cameras placed by their nodes (the parent's transform too) and point lights in W/sr
-/// (candela / 683, times the colour) and spot lights; what hyrt has no model for is skipped with a warning
+/// (candela / 683, times the colour), spot and directional lights; what hyrt has no model for
+/// is skipped with a warning
 /// that names it.
 #[test]
 fn gltf_cameras_and_lights() {
@@ -682,12 +683,14 @@ fn gltf_cameras_and_lights() {
     assert_eq!(spot.axis, Vec3::NEG_Z);
     assert!((spot.cos_inner - 0.1f32.cos()).abs() < 1e-6 && (spot.cos_outer - 0.5f32.cos()).abs() < 1e-6);
     assert!(close(m.lights[1].intensity, Vec3::splat(10.0 / 683.0)));
+    // The directional light travels down its node's -Z, 3 lux = 3 / 683 W/m^2; it is placed
+    // with the scene's bounds.
+    assert_eq!(m.directional.len(), 1);
+    assert_eq!(m.directional[0].direction, Vec3::NEG_Z);
+    assert!(close(m.directional[0].irradiance, Vec3::splat(3.0 / 683.0)));
     let warnings = m.warnings.join("\n");
-    for part in [
-        "camera 1 is orthographic",
-        "camera 2 'spare' is placed by no node",
-        "light 2 is a directional light",
-    ] {
+    assert_eq!(m.warnings.len(), 2, "{warnings}");
+    for part in ["camera 1 is orthographic", "camera 2 'spare' is placed by no node"] {
         assert!(warnings.contains(part), "{warnings:?} should mention {part:?}");
     }
     assert!(m.warnings.iter().all(|w| w.starts_with(&format!("{}", dir.path().join("lit.gltf").display()))));
@@ -698,9 +701,9 @@ fn gltf_cameras_and_lights() {
     let s = scene::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.camera, Some(c.camera));
     assert_eq!((s.settings.width, s.settings.height), (640, 320));
-    assert_eq!(s.lights.len(), 2);
+    assert_eq!(s.lights.len(), 3);
     assert!(s.settings.exposure > 0.0 && s.settings.exposure.is_finite() && s.settings.exposure != 1.0);
-    assert_eq!(s.warnings.len(), 3);
+    assert_eq!(s.warnings.len(), 2);
     let o = scene::Overrides { camera: Some(1), ..Default::default() };
     assert_contains(
         &err_text(scene::load_with(p.to_str().unwrap(), o)),
@@ -734,9 +737,11 @@ fn toml_with_gltf_cameras_and_lights() {
     let cam = s.camera.unwrap();
     assert!((cam.eye - Vec3::new(101.0, 2.0, 13.0)).length() < 1e-4, "{:?}", cam.eye);
     assert_eq!((s.settings.width, s.settings.height), (640, 320));
-    assert_eq!(s.lights.len(), 3);
+    // The glTF's point and spot lights, the [[light]], then the directional light.
+    assert_eq!(s.lights.len(), 4);
     assert_eq!(s.lights[0].position, Vec3::new(100.0, 5.0, 0.0));
     assert_eq!(s.lights[2].intensity, Vec3::splat(2.0));
+    assert!(s.lights[3].position.z > 1e3, "{}", s.lights[3].position);
     // A rotation turns a spot's axis with it: a quarter turn about +Y takes -Z to -X.
     let p = write(dir.path(), "turned.toml", "[[mesh]]\npath = \"lit.gltf\"\nrotate = [0, 90, 0]\n");
     let axis = file::load(&p).unwrap().lights[1].spot.unwrap().axis;

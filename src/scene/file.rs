@@ -51,6 +51,11 @@
 //! inner_angle = 15.0                     # degrees from the axis at full intensity (default 0)
 //! outer_angle = 30.0                     # degrees from the axis beyond which it is dark
 //! intensity = 2.0                        # W/sr on the axis
+//!
+//! [[light]]                              # the sun
+//! kind = "directional"
+//! direction = [-0.35, -0.55, -0.76]      # the way the light travels
+//! irradiance = 2.0                       # W/m^2 (W per square scene unit) on a surface facing it
 //! ```
 //!
 //! Rules:
@@ -95,9 +100,12 @@
 //!   1 within `inner_angle` of `direction`, 0 beyond `outer_angle`, and between them the smooth
 //!   ramp glTF recommends, `t^2` with `t = (cos a - cos outer) / (cos inner - cos outer)`;
 //!   `0 <= inner_angle <= outer_angle <= 90`. Points outside the cone get neither a map
-//!   decision nor a shadow ray, and VPL paths leave into the cone only. `kind = "directional"`
-//!   is an error for now (no directional lights yet); a spot's keys on a point light are an
-//!   error too.
+//!   decision nor a shadow ray, and VPL paths leave into the cone only. With
+//!   `kind = "directional"`, parallel light along `direction` with `irradiance` (no `position`
+//!   nor `intensity`): it is rendered as a point light 1000 scene diagonals away, so that its
+//!   rays deviate from `direction` by at most 1/2000 rad (0.029 degrees, a tenth of the sun's
+//!   own angular radius) and its irradiance by at most 0.1 % across the scene, the same for the
+//!   reference and the hybrid (`scene::Directional`). Keys of another kind are an error.
 //!
 //! Errors name the scene file, with a line number where one is known (the TOML parser's
 //! messages include line and column); an error inside a mesh file names both files.
@@ -184,20 +192,58 @@ struct MaterialSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightSpec {
-    /// `point` (the default) or `spot`.
+    /// `point` (the default), `spot` or `directional`.
     kind: Option<String>,
-    position: V3,
-    intensity: Splat3,
+    position: Option<V3>,
+    intensity: Option<Splat3>,
+    /// Directional lights: what a surface facing them receives, W/m^2.
+    irradiance: Option<Splat3>,
     /// Spot lights: the axis (the way the light shines) and the cone's half-angles in degrees.
     direction: Option<V3>,
     inner_angle: Option<f32>,
     outer_angle: Option<f32>,
 }
 
+/// What a `[[light]]` table makes.
+enum Light {
+    Point(PointLight),
+    Directional(super::Directional),
+}
+
 impl LightSpec {
     /// The light, or why the table does not make one.
-    fn light(&self) -> std::result::Result<PointLight, String> {
-        let light = PointLight { position: self.position.0, intensity: self.intensity.0, spot: None };
+    fn light(&self) -> std::result::Result<Light, String> {
+        let kind = self.kind.as_deref().unwrap_or("point");
+        if kind == "directional" {
+            let (Some(d), Some(e)) = (self.direction, self.irradiance) else {
+                return Err("a directional light needs 'direction' and 'irradiance'".to_string());
+            };
+            if self.position.is_some()
+                || self.intensity.is_some()
+                || self.inner_angle.is_some()
+                || self.outer_angle.is_some()
+            {
+                return Err("a directional light has 'direction' and 'irradiance' only".to_string());
+            }
+            if !(d.0.is_finite() && d.0 != Vec3::ZERO) {
+                return Err("a directional light's 'direction' must be a finite, non-zero vector".to_string());
+            }
+            return Ok(Light::Directional(super::Directional { direction: d.0, irradiance: e.0 }));
+        }
+        if self.irradiance.is_some() {
+            return Err(
+                "'irradiance' belongs to kind = \"directional\" ('intensity' gives a point or spot light's)"
+                    .to_string(),
+            );
+        }
+        let (Some(position), Some(intensity)) = (self.position, self.intensity) else {
+            return Err(format!("a {kind} light needs 'position' and 'intensity'"));
+        };
+        self.point(PointLight { position: position.0, intensity: intensity.0, spot: None }).map(Light::Point)
+    }
+
+    /// A point or spot light at `light`'s position and intensity.
+    fn point(&self, light: PointLight) -> std::result::Result<PointLight, String> {
         let spot_keys = self.direction.is_some() || self.inner_angle.is_some() || self.outer_angle.is_some();
         match self.kind.as_deref().unwrap_or("point") {
             "point" if spot_keys => {
@@ -220,10 +266,9 @@ impl LightSpec {
                 let spot = super::Spot::new(d.0, inner.to_radians(), outer.to_radians());
                 Ok(PointLight { spot: Some(spot), ..light })
             }
-            "directional" => {
-                Err("directional lights are not supported yet (hyrt has point and spot lights)".to_string())
+            other => {
+                Err(format!("unknown light kind '{other}' (expected \"point\", \"spot\" or \"directional\")"))
             }
-            other => Err(format!("unknown light kind '{other}' (expected \"point\" or \"spot\")")),
         }
     }
 }
@@ -389,10 +434,12 @@ pub fn load(path: &Path) -> Result<Scene> {
     }
 
     for spec in &file.light {
-        let light =
-            spec.get_ref().light().map_err(|e| anyhow::anyhow!("{}: [[light]]: {e}", at(spec.span())))?;
-        scene.lights.push(light);
+        match spec.get_ref().light().map_err(|e| anyhow::anyhow!("{}: [[light]]: {e}", at(spec.span())))? {
+            Light::Point(l) => scene.lights.push(l),
+            Light::Directional(d) => scene.directional.push(d),
+        }
     }
+    scene.place_directional_lights();
 
     if let Some(s) = &file.settings {
         let d = &mut scene.settings;

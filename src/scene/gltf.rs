@@ -21,8 +21,9 @@
 //! 555 nm) and multiplied by the light's linear `color`. `range` is ignored: light falls off
 //! with the square of the distance alone, as the specification allows. Spot lights shine down
 //! their node's -Z with the cone's `innerConeAngle` and `outerConeAngle` (and the smooth
-//! falloff between them that the specification recommends, `Spot`). Directional lights are
-//! skipped with a warning (hyrt has point and spot lights).
+//! falloff between them that the specification recommends, `Spot`). Directional lights travel
+//! down their node's -Z; their intensity is in lux (lm/m^2), divided by 683 to W/m^2 (they
+//! are placed as `Directional` says).
 //!
 //! The crate is built without its `import` feature, so buffers are resolved here: the GLB binary
 //! chunk, external files relative to the glTF file, and base64 `data:` URIs. Every accessor is
@@ -39,7 +40,7 @@ use gltf::mesh::{Mode, Semantic};
 
 use super::obj::{read_bytes, unit_normals};
 use super::texture::Texture;
-use super::{Camera, FileCamera, Material, MeshData, MeshRange, PointLight, Spot};
+use super::{Camera, Directional, FileCamera, Material, MeshData, MeshRange, PointLight, Spot};
 
 /// Diffuse colour of the material given to primitives without one.
 const DEFAULT_KD: Vec3 = Vec3::splat(0.8);
@@ -331,14 +332,10 @@ struct Loader<'a> {
 }
 
 impl Loader<'_> {
-    /// Adds a `KHR_lights_punctual` light placed by `world`: a point light (module docs), or a
-    /// warning for the kinds hyrt does not have.
+    /// Adds a `KHR_lights_punctual` light placed by `world`: a point, spot or directional
+    /// light (module docs).
     fn add_light(&mut self, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
         use gltf::khr_lights_punctual::Kind;
-        let name = match light.name() {
-            Some(n) => format!("light {} '{n}'", light.index()),
-            None => format!("light {}", light.index()),
-        };
         let intensity = Vec3::from(light.color()) * (light.intensity() / LUMENS_PER_WATT);
         let position = world.transform_point3(Vec3::ZERO);
         let spot = match light.kind() {
@@ -347,10 +344,10 @@ impl Loader<'_> {
                 Some(Spot::new(world.transform_vector3(Vec3::NEG_Z), inner_cone_angle, outer_cone_angle))
             }
             Kind::Directional => {
-                self.mesh.warnings.push(format!(
-                    "{}: {name} is a directional light (hyrt has point and spot lights): skipped",
-                    self.path.display()
-                ));
+                // Lux (lm/m^2) to W/m^2, as candela to W/sr.
+                let irradiance = Vec3::from(light.color()) * (light.intensity() / LUMENS_PER_WATT);
+                let direction = world.transform_vector3(Vec3::NEG_Z);
+                self.mesh.directional.push(Directional { direction, irradiance });
                 return;
             }
         };

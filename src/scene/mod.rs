@@ -85,6 +85,28 @@ impl Spot {
     }
 }
 
+/// A directional light (the sun): parallel light travelling along `direction`, giving
+/// `irradiance` (W/m^2 per RGB channel, or W per square scene unit) to a surface facing it.
+///
+/// It is rendered as a point light [`SUN_DISTANCE`] scene diagonals away against `direction`
+/// from the centre of the scene's bounds, with intensity `irradiance D^2`
+/// ([`Scene::place_directional_lights`]): the reference and the hybrid alike, so the maps and
+/// the rays see the same light. Across the scene its rays then deviate from `direction` by at
+/// most `(diagonal / 2) / D = 1 / 2000` rad (0.029 degrees: a tenth of the sun's own angular
+/// radius, 0.27 degrees, which real sunlight spreads over anyway), and its irradiance varies by
+/// at most `(1 + 1/2000)^2 - 1`, 0.1 %. A real orthographic map would need its own map layout
+/// and decision rule; this costs neither, and paged maps resolve the distant light at the
+/// receivers' resolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Directional {
+    /// The way the light travels (any length).
+    pub direction: Vec3,
+    pub irradiance: Vec3,
+}
+
+/// How far a [`Directional`] light is placed, in scene diagonals.
+pub const SUN_DISTANCE: f32 = 1000.0;
+
 /// A pinhole camera. The field of view is vertical; `fov_x_deg`, when given (as the Radiance
 /// office view does), fixes the horizontal extent too, otherwise it follows the image aspect.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -170,6 +192,9 @@ pub struct Scene {
     pub size_given: bool,
     /// What loading skipped or could not honour, for the user (never an error).
     pub warnings: Vec<String>,
+    /// Directional lights not yet placed among [`Scene::lights`]
+    /// ([`Scene::place_directional_lights`], once the geometry is known).
+    pub directional: Vec<Directional>,
 }
 
 /// A scene's request for indirect light from virtual point lights: how many, and how they are
@@ -206,6 +231,8 @@ pub struct MeshData {
     pub cameras: Vec<FileCamera>,
     /// Point lights the file defines (glTF `KHR_lights_punctual`).
     pub lights: Vec<PointLight>,
+    /// Directional lights the file defines.
+    pub directional: Vec<Directional>,
     /// What the loader skipped or could not honour.
     pub warnings: Vec<String>,
 }
@@ -224,6 +251,9 @@ impl MeshData {
             if let Some(s) = &mut l.spot {
                 s.axis = m.transform_vector3(s.axis).normalize_or_zero();
             }
+        }
+        for d in &mut self.directional {
+            d.direction = m.transform_vector3(d.direction);
         }
         let n = m.inverse().transpose();
         for t in &mut self.positions {
@@ -262,6 +292,7 @@ impl Scene {
         let tri_base = self.positions.len() as u32;
         self.cameras.extend(mesh.cameras);
         self.lights.extend(mesh.lights);
+        self.directional.extend(mesh.directional);
         self.warnings.extend(mesh.warnings);
         let tex_base = self.textures.len() as u32;
         self.materials.extend(mesh.materials.into_iter().map(|mut m| {
@@ -337,6 +368,25 @@ impl Scene {
         match &self.source {
             Some(p) => p.display().to_string(),
             None => format!("built-in scene '{}'", self.name),
+        }
+    }
+
+    /// Places the pending directional lights ([`Scene::directional`]) among the lights, as
+    /// [`Directional`] says, after the others; without geometry (no bounds) they are dropped.
+    pub fn place_directional_lights(&mut self) {
+        let Some((lo, hi)) = self.bounds() else {
+            self.directional.clear();
+            return;
+        };
+        let centre = (lo + hi) * 0.5;
+        let d = SUN_DISTANCE * (hi - lo).length().max(f32::MIN_POSITIVE.sqrt());
+        for sun in std::mem::take(&mut self.directional) {
+            let dir = sun.direction.normalize_or_zero();
+            self.lights.push(PointLight {
+                position: centre - dir * d,
+                intensity: sun.irradiance * (d * d),
+                spot: None,
+            });
         }
     }
 
@@ -514,6 +564,7 @@ pub fn load(spec: &str) -> Result<Scene> {
                 Scene::new(&path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
             scene.source = Some(path.to_path_buf());
             scene.add_mesh(load_mesh(path)?);
+            scene.place_directional_lights();
             // The file's own camera and lights first; what it lacks is made up.
             if !scene.cameras.is_empty() {
                 scene.use_file_camera(0)?;

@@ -214,6 +214,17 @@ fn gltf_base_color_texture_and_its_transform() {
     assert!(close(uv[2], Vec2::new(-2.5, 0.25)), "{uv:?}");
     assert!(m.warnings.is_empty(), "{:?}", m.warnings);
 
+    // A rough metal: its colour is its highlight's F0 = base m, which the texture tints too
+    // (its diffuse term, base (1 - m), is zero).
+    let metal = gltf("", &embedded).replace(r#""metallicFactor": 0.0"#, r#""metallicFactor": 1.0"#);
+    std::fs::write(&p, metal).unwrap();
+    let s = scene::load(p.to_str().unwrap()).unwrap();
+    let b = [0.2, 0.5, 0.3];
+    let uv = s.uvs[0][0] * b[0] + s.uvs[0][1] * b[1] + s.uvs[0][2] * b[2];
+    let (albedo, highlight) = s.colours(0, b, 0.0, 1.0);
+    assert_eq!(albedo, Vec3::ZERO);
+    assert!((highlight - s.textures[0].sample(uv, 0.0)).length() < 1e-6, "{highlight}");
+
     // An image file that is missing: a warning naming it and the material; the factors stay.
     std::fs::write(&p, gltf("", r#"{"uri": "gone.png"}"#)).unwrap();
     let m = scene::gltf::load(&p).unwrap();

@@ -109,7 +109,7 @@ pub(crate) fn reflect(
         }
     }
     let diffuse = hit.albedo * FRAC_1_PI * sum;
-    if highlight { diffuse + m.highlight * lobe_sum } else { diffuse }
+    if highlight { diffuse + hit.highlight * lobe_sum } else { diffuse }
 }
 
 /// [`shade`] at a point with no screen neighbours (a mirror hit): shadow rays, or the maps'

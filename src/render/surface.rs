@@ -23,6 +23,8 @@ pub struct SurfaceHit {
     pub wo: Vec3,
     /// Diffuse albedo here: the material's `Kd`, times its texture ([`Scene::albedo`]).
     pub albedo: Vec3,
+    /// The highlight's reflectance here ([`Scene::colours`]).
+    pub highlight: Vec3,
 }
 
 impl SurfaceHit {
@@ -34,7 +36,7 @@ impl SurfaceHit {
         let b = hit.bary;
         let ns = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize_or(ng);
         let wo = -dir;
-        let albedo = scene.albedo(hit.tri, hit.bary, hit.t, ng.dot(wo));
+        let (albedo, highlight) = scene.colours(hit.tri, hit.bary, hit.t, ng.dot(wo));
         // Two-sided: the side facing the viewer is the front.
         let flip = if ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
         let (ng, mut ns) = (ng * flip, ns * flip);
@@ -43,7 +45,7 @@ impl SurfaceHit {
         if ns.dot(ng) <= 0.0 {
             ns = ng;
         }
-        Self { tri: hit.tri, t: hit.t, p, p_err, ng, ns, wo, albedo }
+        Self { tri: hit.tri, t: hit.t, p, p_err, ng, ns, wo, albedo, highlight }
     }
 
     /// The hit's point on triangle `tri`, its rounding bound, and the triangle's unit normal

@@ -410,7 +410,9 @@ pub fn load(path: &Path) -> Result<Scene> {
                 m.diffuse = c.0;
             }
             if let Some(c) = o.highlight {
+                // As given: a texture no longer tints it.
                 m.highlight = c.0;
+                m.highlight_base = Vec3::ZERO;
             }
             if let Some(n) = o.shininess {
                 m.shininess = n;

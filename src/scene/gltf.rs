@@ -8,11 +8,11 @@
 //! skipped with a warning.
 //!
 //! **Textures.** A material's `baseColorTexture` (an external file, a `data:` URI or a buffer
-//! view; PNG or JPEG) multiplies its diffuse albedo, read at the texture coordinates of its
-//! `texCoord` set, transformed by `KHR_texture_transform` when present (`offset`, `rotation`
-//! and `scale`, as the specification's matrix does them). It does not tint the highlight: a
-//! metal's colour, which is its highlight's, keeps its factor; metallic-roughness, normal and
-//! emissive textures are ignored. An image that cannot be read is a warning; the material
+//! view; PNG or JPEG) multiplies its base colour, in the diffuse term and in the highlight's
+//! `F0` (`Material::highlight_base`), read at the texture coordinates of its `texCoord` set,
+//! transformed by `KHR_texture_transform` when present (`offset`, `rotation` and `scale`, as
+//! the specification's matrix does them). A smooth metal's mirror reflectance keeps its
+//! factor; metallic-roughness, normal and emissive textures are ignored. An image that cannot be read is a warning; the material
 //! keeps its factors.
 //!
 //! **Lights** (`KHR_lights_punctual`). Point lights at their node's origin. Their intensity is
@@ -71,7 +71,7 @@ fn ignorable_extension(name: &str) -> bool {
 /// determinant) are re-wound so they stay counter-clockwise. Only `TRIANGLES` primitives are
 /// loaded; other modes are skipped. Each glTF material's metallic-roughness factors become a
 /// [`Material`] as [`Material::from_gltf`] maps them, its `baseColorTexture` (with its
-/// `KHR_texture_transform`) multiplying the diffuse term (module docs). Each node instance of a mesh becomes a
+/// `KHR_texture_transform`) multiplying the base colour (module docs). Each node instance of a mesh becomes a
 /// [`MeshRange`] named after the node (or the mesh).
 pub fn load(path: &Path) -> Result<MeshData> {
     let shown = path.display();

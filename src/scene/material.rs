@@ -50,7 +50,8 @@
 //! # Reading glTF metallic-roughness
 //!
 //! With base colour `c`, metallic `m` and roughness `r` (the factors; a base colour texture
-//! multiplies the diffuse term alone, `src/scene/texture.rs`):
+//! multiplies `c` in the diffuse term and in the highlight's `F0`, `src/scene/texture.rs`, but
+//! not a smooth metal's mirror reflectance):
 //!
 //! - the diffuse albedo is `c (1 - m)`, and the specular reflectance `F0 = 0.04 (1 - m) + c m`
 //!   (the glTF specification's mix of a dielectric's 4 % and the metal's colour);
@@ -93,6 +94,9 @@ pub struct Material {
     /// The texture that multiplies `diffuse` (an index into the scene's textures; MTL
     /// `map_Kd`, glTF `baseColorTexture`), if any.
     pub texture: Option<u32>,
+    /// The part of `highlight` that is the base colour, which the texture multiplies too: a
+    /// glTF metal's `base m` (its highlight is `0.04 (1 - m) + base m`); zero otherwise.
+    pub highlight_base: Vec3,
 }
 
 /// Where a material's mirror reflectance came from.
@@ -132,6 +136,7 @@ impl Material {
             mirror: Vec3::ZERO,
             mirror_source: MirrorSource::Code,
             texture: None,
+            highlight_base: Vec3::ZERO,
         }
     }
 
@@ -167,7 +172,7 @@ impl Material {
                 ..Self::matte(name, kd)
             };
         }
-        Self::glossy(name, kd, f0, gltf_shininess(r))
+        Self { highlight_base: base_color * m, ..Self::glossy(name, kd, f0, gltf_shininess(r)) }
     }
 
     /// True when the material spawns reflection rays.

@@ -338,14 +338,22 @@ impl Scene {
     /// ([`texture::footprint`]; for rays that are not the camera's, their own length stands
     /// for the distance). Exactly `diffuse` for a material without a texture.
     pub fn albedo(&self, tri: u32, bary: [f32; 3], t: f32, cos: f32) -> Vec3 {
+        self.colours(tri, bary, t, cos).0
+    }
+
+    /// [`Scene::albedo`], and the highlight's reflectance there: the material's `highlight`,
+    /// its base-colour part ([`Material::highlight_base`]) times the texture. Both exactly the
+    /// material's without a texture.
+    pub fn colours(&self, tri: u32, bary: [f32; 3], t: f32, cos: f32) -> (Vec3, Vec3) {
         let m = &self.materials[self.material[tri as usize] as usize];
-        let Some(k) = m.texture else { return m.diffuse };
+        let Some(k) = m.texture else { return (m.diffuse, m.highlight) };
         let (Some(tex), Some(uv)) = (self.textures.get(k as usize), self.uvs.get(tri as usize)) else {
-            return m.diffuse;
+            return (m.diffuse, m.highlight);
         };
         let at = uv[0] * bary[0] + uv[1] * bary[1] + uv[2] * bary[2];
         let density = texture::uv_per_world(&self.positions[tri as usize], uv);
-        m.diffuse * tex.sample(at, texture::footprint(t, self.pixel_angle(), cos, density))
+        let c = tex.sample(at, texture::footprint(t, self.pixel_angle(), cos, density));
+        (m.diffuse * c, m.highlight + m.highlight_base * (c - Vec3::ONE))
     }
 
     /// The angle one pixel of the camera subtends vertically (radians, at the image's centre);

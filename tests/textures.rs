@@ -48,6 +48,12 @@ fn textured_obj(dir: &Path, half: f32, texture: &str) -> std::path::PathBuf {
 fn obj_textures_load_with_their_coordinates_and_missing_ones_warn() {
     let dir = tempfile::tempdir().unwrap();
     png(&dir.path().join("rgb.png"), 2, 1, |x, _| if x == 0 { [255, 0, 0] } else { [0, 0, 255] });
+    // A Windows path and texture options before the file name.
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    png(&dir.path().join("sub/w.png"), 1, 1, |_, _| [0, 255, 0]);
+    let q = textured_obj(dir.path(), 1.0, "-s 2 2 1 sub\\w.png");
+    let s = scene::load(q.to_str().unwrap()).unwrap();
+    assert_eq!(s.albedo(0, [0.25, 0.25, 0.5], 0.0, 1.0), Vec3::new(0.0, 1.0, 0.0));
     let p = textured_obj(dir.path(), 1.0, "RGB.PNG");
     let s = scene::load(p.to_str().unwrap()).unwrap();
     // Found despite the case of its name; one texture for the two materials that name files.

@@ -29,7 +29,9 @@ const DEFAULT_MATERIAL: &str = "default";
 /// Faces are triangulated as fans; points and lines are ignored. Each object or group (and each
 /// material change within one) becomes a [`MeshRange`]. `mtllib` paths are resolved relative to
 /// the OBJ file's directory. Faces without a usable material get a grey diffuse material named
-/// `"default"`.
+/// `"default"`. Texture coordinates (`vt`, v flipped to count rows from the top) and `map_Kd`
+/// textures (relative to their MTL file) are read; a texture that cannot be read is a warning
+/// in [`MeshData::warnings`].
 ///
 /// Errors name the file and, where possible, the line: `office.obj:17: malformed vertex
 /// 'v 1.0 abc 2.0'`.
@@ -409,9 +411,11 @@ fn any_case(path: &Path) -> PathBuf {
 /// The file name of a texture statement's argument: its last word when options (`-s 1 1 1`,
 /// `-bm 0.5`, ...) come first, which hyrt does not honour; the whole argument otherwise (file
 /// names may hold spaces).
-fn texture_file(arg: &str) -> &str {
+fn texture_file(arg: &str) -> String {
     let arg = arg.trim();
-    if arg.starts_with('-') { arg.split_whitespace().last().unwrap_or(arg) } else { arg }
+    let file = if arg.starts_with('-') { arg.split_whitespace().last().unwrap_or(arg) } else { arg };
+    // Files written on Windows name `textures\wall.jpg`.
+    file.replace('\\', "/")
 }
 
 /// Appends one library's materials, later definitions of a name winning (as in tobj).

@@ -136,6 +136,14 @@ pub fn load(path: &Path) -> Result<MeshData> {
             pbr.metallic_factor(),
             pbr.roughness_factor(),
         );
+        // Cut-outs and blending are not rendered yet: say so rather than draw them solid
+        // without a word.
+        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
+            warnings.push(format!(
+                "{shown}: material '{name}' has alphaMode {:?}: hyrt renders it opaque (no alpha cut-outs yet)",
+                m.alpha_mode()
+            ));
+        }
         let mut uv_map = None;
         if let Some(info) = pbr.base_color_texture() {
             let image = info.texture().source();

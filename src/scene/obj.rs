@@ -86,6 +86,16 @@ pub fn load(path: &Path) -> Result<MeshData> {
             m.shininess,
             m.illumination_model,
         );
+        // Cut-outs and transparency are not rendered yet: say so rather than draw them solid
+        // without a word.
+        if m.dissolve_texture.is_some() || m.dissolve.is_some_and(|d| d < 1.0) {
+            let what = if m.dissolve_texture.is_some() { "an alpha map (map_d)" } else { "a dissolve d < 1" };
+            mesh.warnings.push(format!(
+                "{}: material '{}' has {what}: hyrt renders it opaque (no alpha cut-outs yet)",
+                path.display(),
+                m.name
+            ));
+        }
         if let Some(file) = &m.diffuse_texture {
             let got = loaded.entry(file.clone()).or_insert_with(|| {
                 match Texture::load(&any_case(Path::new(file))) {

@@ -687,6 +687,18 @@ impl Inspector {
         };
         self.frame_rate(ui, &r);
         ui.separator();
+        // What loading skipped or could not honour (a missing texture, a light kind hyrt does
+        // not have), as `hyrt render` prints it.
+        if let Some(warnings) = self.loaded.as_ref().map(|l| &l.scene.warnings).filter(|w| !w.is_empty()) {
+            egui::CollapsingHeader::new(format!("Scene warnings ({})", warnings.len()))
+                .default_open(false)
+                .show(ui, |ui| {
+                    for w in warnings {
+                        ui.label(RichText::new(w).color(Color32::from_rgb(255, 200, 120)));
+                    }
+                });
+            ui.separator();
+        }
         self.pixel_panel(ui, &r);
         ui.separator();
         egui::CollapsingHeader::new("Plan").default_open(true).show(ui, |ui| {

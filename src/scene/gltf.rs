@@ -305,23 +305,23 @@ fn decode_image(
     buffers: &[Vec<u8>],
 ) -> std::result::Result<Texture, String> {
     let name = format!("image {}", image.index());
-    let bytes = match image.source() {
+    let decoded = match image.source() {
         gltf::image::Source::View { view, .. } => {
             let data =
                 buffers.get(view.buffer().index()).ok_or_else(|| format!("{name}: its buffer is missing"))?;
-            data.get(view.offset()..view.offset() + view.length())
-                .ok_or_else(|| format!("{name}: its buffer view lies outside the buffer"))?
-                .to_vec()
+            let bytes = view
+                .offset()
+                .checked_add(view.length())
+                .and_then(|end| data.get(view.offset()..end))
+                .ok_or_else(|| format!("{name}: its buffer view lies outside the buffer"))?;
+            Texture::decode(&name, bytes)
         }
         gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
-            Some(rest) => decode_data_uri(rest).map_err(|e| format!("{name}: {e}"))?,
-            None => {
-                let file = path.parent().unwrap_or(Path::new("")).join(percent_decode(uri));
-                return Texture::load(&file).map_err(|e| format!("{e:#}"));
-            }
+            Some(rest) => Texture::decode(&name, &decode_data_uri(rest).map_err(|e| format!("{name}: {e}"))?),
+            None => Texture::load(&path.parent().unwrap_or(Path::new("")).join(percent_decode(uri))),
         },
     };
-    Texture::decode(&name, &bytes).map_err(|e| format!("{e:#}"))
+    decoded.map_err(|e| format!("{e:#}"))
 }
 
 /// Flattening state while walking the node tree.

@@ -240,37 +240,3 @@ fn gltf_base_color_texture_and_its_transform() {
         assert!(m.warnings[0].contains(part), "{:?} should mention {part:?}", m.warnings[0]);
     }
 }
-
-/// Cut-outs and transparency are not rendered yet: each material that asks for them is named
-/// in a warning rather than drawn solid without a word (MTL `map_d` or `d` below 1, glTF
-/// `alphaMode` other than `OPAQUE`).
-#[test]
-fn alpha_is_reported_not_silently_drawn_solid() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("a.mtl"),
-        "newmtl leaves\nKd 0 1 0\nmap_d leaves.png\n\nnewmtl glass\nKd 1 1 1\nd 0.3\n\nnewmtl wall\nKd 1 1 1\nd 1\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("a.obj"),
-        "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl leaves\nf 1 2 3\nusemtl glass\nf 1 2 3\nusemtl wall\nf 1 2 3\n",
-    )
-    .unwrap();
-    let m = scene::obj::load(&dir.path().join("a.obj")).unwrap();
-    assert_eq!(m.warnings.len(), 2, "{:?}", m.warnings);
-    assert!(m.warnings[0].contains("'leaves' has an alpha map (map_d)") && m.warnings[0].contains("opaque"));
-    assert!(m.warnings[1].contains("'glass' has a dissolve d < 1"));
-
-    let gltf = r#"{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
-      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
-      "materials": [{"name": "fence", "alphaMode": "MASK", "alphaCutoff": 0.5}],
-      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
-      "bufferViews": [{"buffer": 0, "byteLength": 36}],
-      "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]}"#;
-    let p = dir.path().join("f.gltf");
-    std::fs::write(&p, gltf).unwrap();
-    let m = scene::gltf::load(&p).unwrap();
-    assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
-    assert!(m.warnings[0].contains("'fence' has alphaMode Mask") && m.warnings[0].contains("opaque"));
-}

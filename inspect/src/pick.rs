@@ -127,6 +127,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
                     planes: &loaded.planes[..],
                     bias: r.options.shadow.bias,
                     point_error: loaded.point_error,
+                    cutouts: &loaded.cutouts,
                 };
                 let lookup = cls.classify_at(s.p, s.tri, c);
                 let [tx, ty] = lookup.texel;

@@ -254,7 +254,7 @@ fn texel_of(i: u32, side: u32, res: u32) -> u32 {
 /// The depth a paged map shows at face position `(u, v)`: its finest drawn texel's there,
 /// from the plane of the texel's triangle (paged maps store no depths).
 fn paged_depth(map: &LightMap, planes: &[Plane], face: u8, u: f64, v: f64) -> f32 {
-    let cls = Classifier { map, planes, bias: 0.0, point_error: 0.0 };
+    let cls = Classifier { map, planes, bias: 0.0, point_error: 0.0, cutouts: &[] };
     map.finest_texel(face, u, v).map_or(f32::INFINITY, |(level, x, y)| cls.depth_at(level, face, x, y))
 }
 

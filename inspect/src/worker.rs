@@ -60,6 +60,8 @@ pub struct Loaded {
     pub planes: Arc<Vec<Plane>>,
     /// The renderer's bound on a shading point's rounding ([`Renderer::occluders`]).
     pub point_error: f32,
+    /// Per triangle, whether it has an alpha cut-out ([`Renderer::cutouts`]).
+    pub cutouts: Vec<bool>,
     /// The options the flags selected: the knobs' starting values.
     pub options: Options,
     pub load_ms: f64,
@@ -307,6 +309,7 @@ fn run(
         scene: scene.clone(),
         planes,
         point_error: point_error_bound(&scene.positions),
+        cutouts: scene.cutout_flags(),
         options,
         load_ms: t.elapsed().as_secs_f64() * 1e3,
     })));

@@ -101,6 +101,7 @@ fn classify(bencher: Bencher, kind: &str) {
         planes: planes(),
         bias: 1.0,
         point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
+        cutouts: &[],
     };
     let pts = points();
     bencher.counter(divan::counter::ItemsCount::new(pts.len())).bench_local(|| {
@@ -175,6 +176,7 @@ fn vpl_classifier(map: &hyrt_shadowmap::LightMap) -> hyrt_shadowmap::classify::C
         planes: planes(),
         bias: 0.5,
         point_error: hyrt_shadowmap::classify::point_error_bound(scene()),
+        cutouts: &[],
     }
 }
 

@@ -72,6 +72,9 @@ const LIT: u8 = 0;
 const SHADOW: u8 = 1;
 /// An occluder within the bias band of the point: shadowed, and a border.
 const AMBIGUOUS: u8 = 3;
+/// An occluder with holes (an alpha cut-out) in front of the point: shadowed, and a border
+/// that nothing settles but a ray.
+const CUTOUT: u8 = 4;
 
 /// Relative margin matching the tracer's shadow rays, which stop `1e-4` of the distance short
 /// of the light (`hyrt_tracer::offset::SHADOW_EPSILON`): occluders that close to the light do
@@ -145,13 +148,16 @@ pub fn triangle_planes(tris: &[[Vec3; 3]]) -> Vec<Plane> {
 /// coplanar triangles of a mesh (a floor, a wall) form one group, which
 /// [`LightMap::build_grouped`](crate::LightMap::build_grouped) summarises as one and
 /// [`Classifier::hull`] decides as one surface. Triangles without a plane are their own group.
-pub fn plane_groups(planes: &[Plane]) -> Vec<u32> {
+/// Triangles with holes (`cutouts[i]`, as in [`Classifier::cutouts`]; may be empty) are
+/// grouped apart from those without, so that a group's first triangle says for all of them.
+pub fn plane_groups(planes: &[Plane], cutouts: &[bool]) -> Vec<u32> {
     // Sorted by the plane's bits (and then by index), equal planes are runs whose first
     // element is the group: a parallel sort, where a hash map would insert one at a time.
     let key = |i: u32| {
         let pl = &planes[i as usize];
         let n = pl.n.to_array().map(f32::to_bits);
-        (u64::from(n[0]) << 32 | u64::from(n[1]), u64::from(n[2]), pl.d.to_bits(), i)
+        let holes = u64::from(cutouts.get(i as usize).is_some_and(|&c| c));
+        (u64::from(n[0]) << 32 | u64::from(n[1]), u64::from(n[2]) << 1 | holes, pl.d.to_bits(), i)
     };
     let mut order: Vec<(u64, u64, u64, u32)> = (0..planes.len() as u32).into_par_iter().map(key).collect();
     order.par_sort_unstable();
@@ -246,6 +252,10 @@ pub struct Classifier<'a> {
     /// its own surface's neighbours, and an occluder that the reference's offset shadow ray
     /// might skip is left to a ray.
     pub point_error: f32,
+    /// Per triangle id, whether it has holes (alpha cut-outs); empty when none has. The map
+    /// holds such a triangle as solid, so where its texel would shadow a point, the point is
+    /// undecided instead: a ray, which sees the holes, decides (module docs).
+    pub cutouts: &'a [bool],
 }
 
 impl Classifier<'_> {
@@ -378,7 +388,10 @@ impl Classifier<'_> {
                 _ => return Hull::Unknown,
             },
         };
-        let Some(occ) = self.planes.get(seen as usize).filter(|o| o.n != Vec3::ZERO) else {
+        // A cut-out's holes are not in the map (nor, when `seen` stands for a group, in its
+        // members: groups never mix triangles with and without holes, `plane_groups`).
+        let Some(occ) = self.planes.get(seen as usize).filter(|o| o.n != Vec3::ZERO && !self.has_holes(seen))
+        else {
             return Hull::Unknown;
         };
         let d = occ.offset_from(light);
@@ -589,6 +602,8 @@ impl Classifier<'_> {
             };
             if !(t > near && t < r - tol) {
                 LIT
+            } else if self.has_holes(id) {
+                CUTOUT
             } else if t < r - margin {
                 SHADOW
             } else {
@@ -600,11 +615,12 @@ impl Classifier<'_> {
         // An ambiguous texel leans to shadow (an occluder is there, only closer than the bias
         // can tell), and is a border.
         let decision = if d == LIT { Decision::Lit } else { Decision::Shadow };
-        let mut map_border = d == AMBIGUOUS || !in_domain;
+        let mut map_border = d == AMBIGUOUS || d == CUTOUT || !in_domain;
         // The ambiguous triangles (up to two; a third, or a texel deciding shadow, leaves
-        // none), for `suspects`.
+        // none), for `suspects`. A cut-out settles nothing: what its holes let through may
+        // meet an occluder that no texel holds.
         let (mut amb, mut na) = ([centre, EMPTY], usize::from(d == AMBIGUOUS));
-        let mut settles = d != SHADOW && in_domain;
+        let mut settles = d != SHADOW && d != CUTOUT && in_domain;
         if in_domain && (!map_border || settles) {
             // Most footprints see one or two triangles: decide each once.
             let (mut seen, mut n) = ([centre, EMPTY, EMPTY, EMPTY], 1);
@@ -619,7 +635,7 @@ impl Classifier<'_> {
                 if d != LIT && hint == EMPTY {
                     hint = id;
                 }
-                settles &= d != SHADOW;
+                settles &= d != SHADOW && d != CUTOUT;
                 if d == AMBIGUOUS {
                     settles &= na < 2;
                     if na < 2 {
@@ -631,6 +647,12 @@ impl Classifier<'_> {
         }
         let suspects = if map_border && settles && na > 0 { [amb[0], amb[1]] } else { [EMPTY; 2] };
         Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, suspects, face: c.face, texel }
+    }
+
+    /// Whether triangle `id` has holes ([`Classifier::cutouts`]).
+    #[inline]
+    fn has_holes(&self, id: u32) -> bool {
+        self.cutouts.get(id as usize).is_some_and(|&c| c)
     }
 }
 

@@ -29,7 +29,7 @@
 //! // Every face of the cube map drawn.
 //! let map = LightMap::build(&tris, light, &opts, &[true; 6]);
 //! let planes = triangle_planes(&tris);
-//! let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris) };
+//! let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris), cutouts: &[] };
 //! // Under the occluder: shadowed, with the occluder as the hint for a ray; far from it: lit.
 //! let under = cls.classify(Vec3::new(0.0, 0.0, 0.1), 1);
 //! assert_eq!(under.decision, Decision::Shadow);

@@ -54,7 +54,7 @@ fn bilinear_vpl_lookups_have_less_squared_error_at_shadow_edges() {
     let planes = triangle_planes(&tris);
     let opts = MapOptions { kind: MapKind::Paraboloid, resolution: 128, tess_texels: 4.0 };
     let map = LightMap::build_hemisphere(&tris, vpl, Vec3::NEG_Y, &opts);
-    let cls = Classifier { map: &map, planes: &planes, bias: 0.5, point_error: 0.0 };
+    let cls = Classifier { map: &map, planes: &planes, bias: 0.5, point_error: 0.0, cutouts: &[] };
 
     let (mut n, mut edge, mut se_texel, mut se_bilinear, mut fractional) = (0, 0, 0.0, 0.0, 0);
     let steps = 400;

@@ -66,12 +66,17 @@ fn hull_decisions_are_every_points_decision_without_border() {
             let light = centre + Vec3::new(0.3 * size, 1.5 * size, -0.2 * size);
             let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
             let planes = triangle_planes(&tris);
-            let groups = if grouped { plane_groups(&planes) } else { (0..tris.len() as u32).collect() };
+            let groups = if grouped { plane_groups(&planes, &[]) } else { (0..tris.len() as u32).collect() };
             assert_eq!(groups[1] == groups[0], grouped, "the floor's triangles share their plane");
             let map =
                 LightMap::build_grouped(&tris, light, &opts, &[true; 6], if grouped { &groups } else { &[] });
-            let cls =
-                Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris) };
+            let cls = Classifier {
+                map: &map,
+                planes: &planes,
+                bias: 1.0,
+                point_error: point_error_bound(&tris),
+                cutouts: &[],
+            };
             for _ in 0..400 {
                 // A small convex quad on the floor (a tile's corners: a perspective image of a
                 // square, here a random convex quad): on triangle 0 (x > z side), or with
@@ -121,7 +126,7 @@ fn hull_declines_paraboloids_and_empty_input() {
     let opts = MapOptions { kind: MapKind::Paraboloid, resolution: 64, ..MapOptions::default() };
     let map = LightMap::build(&tris, Vec3::Y, &opts, &[true; 2]);
     let planes = triangle_planes(&tris);
-    let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0 };
+    let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0, cutouts: &[] };
     assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0, None, 0), Hull::Unknown);
     assert_eq!(cls.hull(&[], 0, None, 0), Hull::Unknown);
 }
@@ -151,7 +156,13 @@ fn hull_over_an_occluder_and_nothing_is_no_shadow() {
     for res in [64, 256, 1024] {
         let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
         let map = LightMap::build(&tris, light, &opts, &[true; 6]);
-        let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: point_error_bound(&tris) };
+        let cls = Classifier {
+            map: &map,
+            planes: &planes,
+            bias: 1.0,
+            point_error: point_error_bound(&tris),
+            cutouts: &[],
+        };
         // Tiles along the floor's x = 1 edge (on triangle 0, where x > z), a few texels wide.
         for k in 0..200 {
             let z = -0.9 + 1.0 * k as f32 / 200.0;

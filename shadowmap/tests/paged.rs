@@ -53,7 +53,7 @@ fn pages_agree_with_the_whole_face_at_the_same_resolution() {
     let paged = LightMap::build_pages(&tris, light, &opts(0), &all_pages(2), &[]);
     assert!(paged.is_paged() && !whole.is_paged());
     let planes = triangle_planes(&tris);
-    let cls = Classifier { map: &paged, planes: &planes, bias: 1.0, point_error: 0.0 };
+    let cls = Classifier { map: &paged, planes: &planes, bias: 1.0, point_error: 0.0, cutouts: &[] };
     assert_eq!(paged.page_count(), 6 * 16);
     let (mut texels, mut same, mut covered) = (0u64, 0u64, 0u64);
     for face in 0..6u8 {
@@ -145,7 +145,7 @@ fn points_whose_pages_were_not_drawn_are_left_to_rays() {
     };
     let under = Vec3::new(0.0, 0.0, 0.1);
     let map = LightMap::build_pages(&tris, light, &opts(0), &marked(under), &[]);
-    let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0 };
+    let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0, cutouts: &[] };
     let lk = cls.classify_at(under, 1, cls.locate_at(under, level));
     assert_eq!((lk.decision, lk.map_border), (Decision::Shadow, false));
     assert!(lk.hint == 2 || lk.hint == 3);
@@ -181,7 +181,7 @@ fn fine_levels_resolve_a_thin_occluder_far_from_the_light() {
     let planes = triangle_planes(&tris);
     // Points under the rail, across its shadow.
     let shadowed = |map: &LightMap, level: u8| -> usize {
-        let cls = Classifier { map, planes: &planes, bias: 1.0, point_error: 0.0 };
+        let cls = Classifier { map, planes: &planes, bias: 1.0, point_error: 0.0, cutouts: &[] };
         (0..20)
             .filter(|&i| {
                 let p = Vec3::new(-0.0045 + 0.009 * i as f32 / 19.0, 0.0, 0.3);

@@ -120,6 +120,8 @@ pub struct Renderer<'a> {
     /// the light maps summarise their regions by group, and classification decides a tile on
     /// one plane at once. Made on first use.
     plane_groups: std::sync::OnceLock<(Vec<u32>, Vec<bool>)>,
+    /// [`Renderer::cutouts`].
+    cutouts: Vec<bool>,
 }
 
 /// Called once per finished row of each pass (for progress bars).
@@ -134,6 +136,10 @@ impl<'a> Renderer<'a> {
         let tracer = match options.visibility {
             Visibility::Raster => Tracer::build_in_background(&scene.positions),
             Visibility::Rays => Tracer::build(&scene.positions),
+        };
+        let tracer = match crate::scene::cutout::CutoutTest::of(scene) {
+            Some(test) => tracer.with_cutouts(Box::new(test)),
+            None => tracer,
         };
         let cam = scene.camera.expect("validated scene has a camera");
         let camera = CameraRays::new(&cam, scene.settings.width, scene.settings.height);
@@ -161,7 +167,14 @@ impl<'a> Renderer<'a> {
             bounds: scene.bounds(),
             occluders: Default::default(),
             plane_groups: Default::default(),
+            cutouts: scene.cutout_flags(),
         }
+    }
+
+    /// Per triangle, whether it has an alpha cut-out; empty when none has
+    /// ([`crate::scene::Scene::cutout_flags`]).
+    pub fn cutouts(&self) -> &[bool] {
+        &self.cutouts
     }
 
     /// The planes of the scene's triangles and the rounding error of a shading point, for
@@ -178,7 +191,7 @@ impl<'a> Renderer<'a> {
     /// triangles (see [`Renderer::occluders`]).
     pub fn plane_groups(&self) -> (&[u32], &[bool]) {
         let (groups, shared) = self.plane_groups.get_or_init(|| {
-            let groups = hyrt_shadowmap::classify::plane_groups(self.occluders().0);
+            let groups = hyrt_shadowmap::classify::plane_groups(self.occluders().0, self.cutouts());
             let mut size = vec![0u32; groups.len()];
             for &g in &groups {
                 size[g as usize] += 1;

@@ -1240,8 +1240,14 @@ fn settle(r: &Renderer, lk: &Lookup, s: &SurfaceHit, light: Vec3) -> Option<bool
 }
 
 /// The classifier of `map`, with the renderer's bias.
-fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &Renderer) -> Classifier<'m> {
-    Classifier { map, planes, bias: r.options.shadow.bias, point_error: r.occluders().1 }
+fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &'m Renderer) -> Classifier<'m> {
+    Classifier {
+        map,
+        planes,
+        bias: r.options.shadow.bias,
+        point_error: r.occluders().1,
+        cutouts: r.cutouts(),
+    }
 }
 
 /// Light `l`'s decision at `s` by its classifier `cls`, at the level `resolution` gives the
@@ -1264,7 +1270,7 @@ fn locate(cls: &Classifier, resolution: &[Resolution], l: usize, s: &SurfaceHit,
 }
 
 /// The classifier of each of `maps`.
-fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &Renderer) -> Vec<Classifier<'m>> {
+fn classifiers<'m>(maps: &'m [Arc<LightMap>], planes: &'m [Plane], r: &'m Renderer) -> Vec<Classifier<'m>> {
     maps.iter().map(|map| classifier(map, planes, r)).collect()
 }
 

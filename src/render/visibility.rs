@@ -72,9 +72,13 @@ pub fn run(
                 // along edges), where its point on the plane lies off the mesh: past a concave
                 // crease, under the neighbouring face, which would shadow it from every light.
                 // Ask the BVH, and count the ray: the G-buffer is then the ray-cast one there.
+                // And some pixel sees a cut-out's hole (the z-buffer draws cut-outs solid): what
+                // lies behind is the ray's to find, as the reference's primary ray does.
+                let holes = !r.cutouts().is_empty();
                 for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
                     let outside = px.is_some_and(|h| h.bary.iter().any(|&b| b < 0.0));
-                    if outside || (parallel && px.is_none() && id != EMPTY_ID) {
+                    let hole = holes && px.is_some_and(|h| !r.scene.solid_at(h.tri, h.bary));
+                    if outside || hole || (parallel && px.is_none() && id != EMPTY_ID) {
                         if defer {
                             *px = None;
                             deferred.lock().unwrap_or_else(|e| e.into_inner()).push(y * w + x as u32);

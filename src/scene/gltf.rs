@@ -12,8 +12,12 @@
 //! `F0` (`Material::highlight_base`), read at the texture coordinates of its `texCoord` set,
 //! transformed by `KHR_texture_transform` when present (`offset`, `rotation` and `scale`, as
 //! the specification's matrix does them). A smooth metal's mirror reflectance keeps its
-//! factor; metallic-roughness, normal and emissive textures are ignored. An image that cannot be read is a warning; the material
-//! keeps its factors.
+//! factor; metallic-roughness, normal and emissive textures are ignored. An image that cannot
+//! be read is a warning; the material keeps its factors.
+//!
+//! **Alpha.** `alphaMode: MASK` makes a cut-out at `alphaCutoff`: the base colour's alpha
+//! (`baseColorFactor[3]` times the texture's alpha channel) decides holes (`super::cutout`).
+//! `BLEND` is drawn as a mask at 0.5, with a warning.
 //!
 //! **Lights** (`KHR_lights_punctual`). Point lights at their node's origin. Their intensity is
 //! in candela (lumens per steradian); hyrt's lights are radiometric, in watts per steradian,
@@ -38,8 +42,9 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 
+use super::cutout::{Channel, Cutout, Mask};
 use super::obj::{read_bytes, unit_normals};
-use super::texture::Texture;
+use super::texture::{Texture, decode_image as decode_bytes, load_image};
 use super::{Camera, Directional, FileCamera, Material, MeshData, MeshRange, PointLight, Spot};
 
 /// Diffuse colour of the material given to primitives without one.
@@ -122,7 +127,9 @@ pub fn load(path: &Path) -> Result<MeshData> {
     // Each image decoded once, whichever materials read it; one that cannot be read leaves
     // its materials with their factors, each with a warning.
     let mut textures = Vec::new();
-    let mut images: Vec<Option<std::result::Result<u32, String>>> = vec![None; document.images().len()];
+    let mut images: Vec<Option<std::result::Result<(u32, ImageMask), String>>> =
+        (0..document.images().len()).map(|_| None).collect();
+    let mut masks = Vec::new();
     let mut warnings = Vec::new();
     let mut uv_maps = Vec::new();
     let mut materials = Vec::new();
@@ -136,27 +143,43 @@ pub fn load(path: &Path) -> Result<MeshData> {
             pbr.metallic_factor(),
             pbr.roughness_factor(),
         );
-        // Cut-outs and blending are not rendered yet: say so rather than draw them solid
-        // without a word.
-        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            warnings.push(format!(
-                "{shown}: material '{name}' has alphaMode {:?}: hyrt renders it opaque (no alpha cut-outs yet)",
-                m.alpha_mode()
-            ));
-        }
+        // A mask is a cut-out (`cutout` module); blending is read as a mask at 0.5, and said.
+        let cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(Cutout::DEFAULT_CUTOFF)),
+            gltf::material::AlphaMode::Blend => {
+                warnings.push(format!(
+                    "{shown}: material '{name}' has alphaMode BLEND: hyrt draws it as a cut-out at alpha {} (no transparency)",
+                    Cutout::DEFAULT_CUTOFF
+                ));
+                Some(Cutout::DEFAULT_CUTOFF)
+            }
+        };
+        mat.cutout = cutoff.map(|cutoff| Cutout { mask: None, scale: c[3], cutoff });
         let mut uv_map = None;
         if let Some(info) = pbr.base_color_texture() {
             let image = info.texture().source();
             let got = images[image.index()].get_or_insert_with(|| {
-                decode_image(path, &image, &buffers).map(|t| {
+                decode_image(path, &image, &buffers).map(|(t, mask)| {
                     textures.push(t);
-                    textures.len() as u32 - 1
+                    (textures.len() as u32 - 1, mask)
                 })
             });
             match got {
-                Ok(k) => {
+                Ok((k, mask)) => {
                     mat.texture = Some(*k);
                     uv_map = Some(UvMap::of(&info));
+                    if let Some(c) = &mut mat.cutout {
+                        // The image's alpha, made a mask once, for the first material that asks.
+                        if let ImageMask::Unused(m) = std::mem::replace(mask, ImageMask::None) {
+                            masks.push(m);
+                            *mask = ImageMask::At(masks.len() as u32 - 1);
+                        }
+                        c.mask = match mask {
+                            ImageMask::At(k) => Some(*k),
+                            _ => None,
+                        };
+                    }
                 }
                 Err(e) => warnings.push(format!(
                     "{shown}: material '{name}': baseColorTexture: {e}; it is rendered with its factors"
@@ -172,7 +195,7 @@ pub fn load(path: &Path) -> Result<MeshData> {
         path,
         buffers: &buffers,
         uv_maps,
-        mesh: MeshData { materials, textures, warnings, ..Default::default() },
+        mesh: MeshData { materials, textures, masks, warnings, ..Default::default() },
         default_material: None,
         skipped: 0,
     };
@@ -299,11 +322,21 @@ impl UvMap {
 
 /// Decodes image `image` of the file at `path` (an external file, a `data:` URI or a buffer
 /// view), or says why not.
+/// An image's alpha channel as a cut-out mask: kept until a material asks for it, then its
+/// index among the file's masks.
+enum ImageMask {
+    /// No alpha channel: no holes.
+    None,
+    Unused(Mask),
+    At(u32),
+}
+
+/// Decodes image `image` to a colour texture, and its alpha channel (if it has one) to a mask.
 fn decode_image(
     path: &Path,
     image: &gltf::Image,
     buffers: &[Vec<u8>],
-) -> std::result::Result<Texture, String> {
+) -> std::result::Result<(Texture, ImageMask), String> {
     let name = format!("image {}", image.index());
     let decoded = match image.source() {
         gltf::image::Source::View { view, .. } => {
@@ -314,14 +347,25 @@ fn decode_image(
                 .checked_add(view.length())
                 .and_then(|end| data.get(view.offset()..end))
                 .ok_or_else(|| format!("{name}: its buffer view lies outside the buffer"))?;
-            Texture::decode(&name, bytes)
+            decode(&name, bytes)
         }
         gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
-            Some(rest) => Texture::decode(&name, &decode_data_uri(rest).map_err(|e| format!("{name}: {e}"))?),
-            None => Texture::load(&path.parent().unwrap_or(Path::new("")).join(percent_decode(uri))),
+            Some(rest) => decode(&name, &decode_data_uri(rest).map_err(|e| format!("{name}: {e}"))?),
+            None => {
+                let file = path.parent().unwrap_or(Path::new("")).join(percent_decode(uri));
+                load_image(&file).map(|img| (file.display().to_string(), img))
+            }
         },
     };
-    decoded.map_err(|e| format!("{e:#}"))
+    let (name, img) = decoded.map_err(|e| format!("{e:#}"))?;
+    let texture = Texture::from_image(&name, &img).map_err(|e| format!("{e:#}"))?;
+    let mask = Mask::from_image(&name, &img, Channel::Alpha).map_or(ImageMask::None, ImageMask::Unused);
+    Ok((texture, mask))
+}
+
+/// An encoded image named `name`, decoded.
+fn decode(name: &str, bytes: &[u8]) -> Result<(String, image::DynamicImage)> {
+    decode_bytes(name, bytes).map(|img| (name.to_string(), img))
 }
 
 /// Flattening state while walking the node tree.

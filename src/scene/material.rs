@@ -97,6 +97,8 @@ pub struct Material {
     /// The part of `highlight` that is the base colour, which the texture multiplies too: a
     /// glTF metal's `base m` (its highlight is `0.04 (1 - m) + base m`); zero otherwise.
     pub highlight_base: Vec3,
+    /// Holes drawn by an alpha mask (MTL `map_d`, glTF `alphaMode` `MASK` or `BLEND`), if any.
+    pub cutout: Option<super::cutout::Cutout>,
 }
 
 /// Where a material's mirror reflectance came from.
@@ -137,6 +139,7 @@ impl Material {
             mirror_source: MirrorSource::Code,
             texture: None,
             highlight_base: Vec3::ZERO,
+            cutout: None,
         }
     }
 

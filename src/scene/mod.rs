@@ -6,6 +6,7 @@
 //! turned into errors, so a renderer never sees them.
 
 pub mod builtin;
+pub mod cutout;
 pub mod file;
 pub mod gltf;
 pub mod material;
@@ -183,8 +184,10 @@ pub struct Scene {
     pub source: Option<PathBuf>,
     /// The textures its materials read ([`Material::texture`]).
     pub textures: Vec<texture::Texture>,
-    /// Per triangle, its corners' texture coordinates: empty when the scene has no texture,
-    /// else one entry per triangle (zero where the file gave none).
+    /// The alpha masks its materials' cut-outs read ([`cutout::Cutout::mask`]).
+    pub masks: Vec<cutout::Mask>,
+    /// Per triangle, its corners' texture coordinates: empty when the scene has no texture
+    /// and no mask, else one entry per triangle (zero where the file gave none).
     pub uvs: Vec<[Vec2; 3]>,
     /// The cameras its model files define, in file order (`Overrides::camera` picks one).
     pub cameras: Vec<FileCamera>,
@@ -227,6 +230,8 @@ pub struct MeshData {
     pub uvs: Vec<Option<[Vec2; 3]>>,
     /// The textures its materials read (their `texture` indexes this list).
     pub textures: Vec<texture::Texture>,
+    /// The alpha masks its materials' cut-outs read (their `cutout.mask` indexes this list).
+    pub masks: Vec<cutout::Mask>,
     /// Cameras the file defines (glTF), in the file's camera order.
     pub cameras: Vec<FileCamera>,
     /// Point lights the file defines (glTF `KHR_lights_punctual`).
@@ -295,12 +300,17 @@ impl Scene {
         self.directional.extend(mesh.directional);
         self.warnings.extend(mesh.warnings);
         let tex_base = self.textures.len() as u32;
+        let mask_base = self.masks.len() as u32;
         self.materials.extend(mesh.materials.into_iter().map(|mut m| {
             m.texture = m.texture.map(|t| t + tex_base);
+            if let Some(c) = &mut m.cutout {
+                c.mask = c.mask.map(|k| k + mask_base);
+            }
             m
         }));
         self.textures.extend(mesh.textures);
-        if !self.textures.is_empty() {
+        self.masks.extend(mesh.masks);
+        if !self.textures.is_empty() || !self.masks.is_empty() {
             // Coordinates for every triangle once any texture exists (zero where none).
             self.uvs.resize(tri_base as usize, [Vec2::ZERO; 3]);
             let n = mesh.positions.len();

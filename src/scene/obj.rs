@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, bail};
 use glam::{Vec2, Vec3};
 
-use super::texture::Texture;
+use super::cutout::{Channel, Cutout, Mask};
+use super::texture::{Texture, load_image};
 use super::{Material, MeshData, MeshRange};
 
 /// Diffuse colour for materials without `Kd` and for faces without a material.
@@ -29,9 +30,9 @@ const DEFAULT_MATERIAL: &str = "default";
 /// Faces are triangulated as fans; points and lines are ignored. Each object or group (and each
 /// material change within one) becomes a [`MeshRange`]. `mtllib` paths are resolved relative to
 /// the OBJ file's directory. Faces without a usable material get a grey diffuse material named
-/// `"default"`. Texture coordinates (`vt`, v flipped to count rows from the top) and `map_Kd`
-/// textures (relative to their MTL file) are read; a texture that cannot be read is a warning
-/// in [`MeshData::warnings`].
+/// `"default"`. Texture coordinates (`vt`, v flipped to count rows from the top), `map_Kd`
+/// textures and `map_d` alpha maps (cut-outs: `super::cutout`), relative to their MTL file, are
+/// read; an image that cannot be read is a warning in [`MeshData::warnings`].
 ///
 /// Errors name the file and, where possible, the line: `office.obj:17: malformed vertex
 /// 'v 1.0 abc 2.0'`.
@@ -78,6 +79,8 @@ pub fn load(path: &Path) -> Result<MeshData> {
     // Each texture file decoded once, whichever materials read it; one that cannot be read
     // leaves its materials with their Kd, each with a warning.
     let mut loaded: std::collections::HashMap<String, std::result::Result<u32, String>> = Default::default();
+    // Each alpha map likewise, as a mask.
+    let mut masks: std::collections::HashMap<String, std::result::Result<u32, String>> = Default::default();
     for m in &materials {
         let mut mat = Material::from_mtl(
             &m.name,
@@ -86,12 +89,36 @@ pub fn load(path: &Path) -> Result<MeshData> {
             m.shininess,
             m.illumination_model,
         );
-        // Cut-outs and transparency are not rendered yet: say so rather than draw them solid
-        // without a word.
-        if m.dissolve_texture.is_some() || m.dissolve.is_some_and(|d| d < 1.0) {
-            let what = if m.dissolve_texture.is_some() { "an alpha map (map_d)" } else { "a dissolve d < 1" };
+        // An alpha map is a cut-out (`cutout` module); a plain dissolve is transparency, which
+        // hyrt does not render: say so rather than draw it solid without a word.
+        if let Some(file) = &m.dissolve_texture {
+            let got = masks.entry(file.clone()).or_insert_with(|| {
+                let file = any_case(Path::new(file));
+                let name = file.display().to_string();
+                match load_image(&file) {
+                    Ok(img) => match Mask::from_image(&name, &img, Channel::AlphaOrGrey) {
+                        Some(k) => {
+                            mesh.masks.push(k);
+                            Ok(mesh.masks.len() as u32 - 1)
+                        }
+                        None => Err(format!("{name}: the image is empty")),
+                    },
+                    Err(e) => Err(format!("{e:#}")),
+                }
+            });
+            match got {
+                Ok(k) => {
+                    mat.cutout = Some(Cutout { mask: Some(*k), scale: 1.0, cutoff: Cutout::DEFAULT_CUTOFF })
+                }
+                Err(e) => mesh.warnings.push(format!(
+                    "{}: material '{}': map_d {e}; it is rendered without holes",
+                    path.display(),
+                    m.name
+                )),
+            }
+        } else if m.dissolve.is_some_and(|d| d < 1.0) {
             mesh.warnings.push(format!(
-                "{}: material '{}' has {what}: hyrt renders it opaque (no alpha cut-outs yet)",
+                "{}: material '{}' has a dissolve d < 1: hyrt renders it opaque (no transparency)",
                 path.display(),
                 m.name
             ));
@@ -389,7 +416,7 @@ fn load_mtllib(obj: &Path, obj_text: &str, dir: &Path, name: &Path) -> Result<to
         // A texture's file is relative to its library: kept as a path from here.
         let lib_dir = file.parent().unwrap_or(Path::new(""));
         for m in &mut mats {
-            if let Some(t) = &mut m.diffuse_texture {
+            for t in [&mut m.diffuse_texture, &mut m.dissolve_texture].into_iter().flatten() {
                 *t = lib_dir.join(texture_file(t)).to_string_lossy().into_owned();
             }
         }

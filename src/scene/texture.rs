@@ -44,6 +44,17 @@ struct Level {
     texels: Vec<Vec3>,
 }
 
+/// Decodes an encoded image (PNG or JPEG) named `name` in messages.
+pub fn decode_image(name: &str, bytes: &[u8]) -> Result<image::DynamicImage> {
+    image::load_from_memory(bytes).map_err(|e| anyhow!("{name}: cannot decode the image: {e}"))
+}
+
+/// Reads and decodes an image file (PNG or JPEG).
+pub fn load_image(path: &Path) -> Result<image::DynamicImage> {
+    let bytes = super::obj::read_bytes(path)?;
+    decode_image(&path.display().to_string(), &bytes)
+}
+
 /// sRGB-encoded value `c` (0..=255) to linear light (IEC 61966-2-1).
 pub fn srgb_to_linear(c: u8) -> f32 {
     let x = f32::from(c) / 255.0;
@@ -69,16 +80,18 @@ impl Texture {
         Some(Self { name: name.to_string(), levels })
     }
 
-    /// Decodes an image file (PNG or JPEG; alpha is dropped).
+    /// Decodes an image file (PNG or JPEG; alpha is dropped: see [`super::cutout::Mask`]).
     pub fn load(path: &Path) -> Result<Self> {
-        let bytes = super::obj::read_bytes(path)?;
-        Self::decode(&path.display().to_string(), &bytes)
+        Self::from_image(&path.display().to_string(), &load_image(path)?)
     }
 
     /// Decodes an encoded image (PNG or JPEG) named `name` in messages.
     pub fn decode(name: &str, bytes: &[u8]) -> Result<Self> {
-        let img =
-            image::load_from_memory(bytes).map_err(|e| anyhow!("{name}: cannot decode the image: {e}"))?;
+        Self::from_image(name, &decode_image(name, bytes)?)
+    }
+
+    /// The colour texture of a decoded image (its alpha dropped).
+    pub fn from_image(name: &str, img: &image::DynamicImage) -> Result<Self> {
         let rgb = img.to_rgb8();
         Self::from_srgb8(name, rgb.width(), rgb.height(), rgb.as_raw())
             .ok_or_else(|| anyhow!("{name}: the image is empty"))

@@ -104,6 +104,23 @@ impl obvhs::Boundable for Padded {
     }
 }
 
+/// Alpha cut-outs: triangles with holes (leaves, fences, grilles drawn by a texture's alpha).
+///
+/// The tracer knows no textures: [`Tracer::with_cutouts`] gives it this test, and a hit on a
+/// triangle that [`Cutouts::has_holes`] names counts only where [`Cutouts::solid`] says so, in
+/// every query that reports or blocks ([`Tracer::closest_hit`], [`Tracer::occluded`],
+/// [`Tracer::occluded_with_hint`], [`Tracer::hits_triangle`]); a ray passes through the holes
+/// as if the triangle were not there. Plane queries ([`Tracer::hit_on_plane`], the row hits of
+/// [`batch`]) are geometric and ignore it. The test must be a pure function of its arguments:
+/// every ray that meets the same point of the same triangle gets the same answer, whatever its
+/// kind, which is what keeps rays and maps in agreement.
+pub trait Cutouts: Send + Sync {
+    /// Whether triangle `tri` (original id) may have holes; `false` skips [`Cutouts::solid`].
+    fn has_holes(&self, tri: u32) -> bool;
+    /// Whether the point of triangle `tri` at barycentrics `bary` (corners 0, 1, 2) is solid.
+    fn solid(&self, tri: u32, bary: [f32; 3]) -> bool;
+}
+
 /// A ray with a normalised direction; hits are accepted for `0 < t < tmax`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
@@ -142,6 +159,8 @@ pub struct Tracer {
     by_id: Vec<[Vec3; 3]>,
     /// Power of two applied to all coordinates (see [`Tracer::build`]).
     scale: f32,
+    /// The alpha test, if any triangle has holes ([`Tracer::with_cutouts`]).
+    cutouts: Option<Box<dyn Cutouts>>,
 }
 
 /// The scale of [`Tracer::build`] for `tris`, and the triangles times it, by id.
@@ -242,7 +261,7 @@ impl Tracer {
     pub fn build(tris: &[[Vec3; 3]]) -> Self {
         let (scale, by_id) = scaled(tris);
         let built = OnceLock::from(Bvh::build(tris, scale));
-        Self { built, pending: Mutex::new(None), by_id, scale }
+        Self { built, pending: Mutex::new(None), by_id, scale, cutouts: None }
     }
 
     /// [`Tracer::build`], with the BVH built on a thread of its own while the caller goes on:
@@ -261,13 +280,20 @@ impl Tracer {
             Bvh::of_kept(kept, ids, start)
         });
         match spawned {
-            Ok(handle) => Self { built: OnceLock::new(), pending: Mutex::new(Some(handle)), by_id, scale },
+            Ok(handle) => Self {
+                built: OnceLock::new(),
+                pending: Mutex::new(Some(handle)),
+                by_id,
+                scale,
+                cutouts: None,
+            },
             // No thread to be had: built here, at once.
             Err(_) => Self {
                 built: OnceLock::from(Bvh::build(tris, scale)),
                 pending: Mutex::new(None),
                 by_id,
                 scale,
+                cutouts: None,
             },
         }
     }
@@ -282,6 +308,19 @@ impl Tracer {
                 Err(panic) => std::panic::resume_unwind(panic),
             }
         })
+    }
+
+    /// This tracer with alpha cut-outs: hits on `cutouts`' triangles count only where they are
+    /// solid (see [`Cutouts`]).
+    pub fn with_cutouts(mut self, cutouts: Box<dyn Cutouts>) -> Self {
+        self.cutouts = Some(cutouts);
+        self
+    }
+
+    /// Whether a hit on triangle `tri` at `bary` counts: not in a hole of a cut-out.
+    #[inline]
+    fn solid(&self, tri: u32, bary: [f32; 3]) -> bool {
+        self.cutouts.as_ref().is_none_or(|c| !c.has_holes(tri) || c.solid(tri, bary))
     }
 
     /// Wall time of the BVH's build (waiting for a background build to finish).
@@ -329,7 +368,8 @@ impl Tracer {
         // (t, BVH slot, barycentrics) of the best hit so far.
         let mut best: Option<(f32, usize, [f32; 3])> = None;
         bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
-            let Some(h) = intersect_triangle(&pre, &tris[i], r.tmax) else {
+            let Some(h) = intersect_triangle(&pre, &tris[i], r.tmax).filter(|h| self.solid(ids[i], h.bary))
+            else {
                 return f32::INFINITY;
             };
             let better = match best {
@@ -356,13 +396,15 @@ impl Tracer {
     /// True when anything is hit with `0 < t < ray.tmax`.
     pub fn occluded(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> bool {
         counts.add(kind, 1);
-        let Bvh { bvh, tris, .. } = self.bvh();
+        let Bvh { bvh, tris, ids, .. } = self.bvh();
         if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
             return false;
         }
         let (ob, pre) = self.scaled(ray);
         !bvh.ray_traverse_miss(ob, |r, i| {
-            intersect_triangle(&pre, &tris[i], r.tmax).map_or(f32::INFINITY, |h| h.t)
+            intersect_triangle(&pre, &tris[i], r.tmax)
+                .filter(|h| self.solid(ids[i], h.bary))
+                .map_or(f32::INFINITY, |h| h.t)
         })
     }
 
@@ -381,7 +423,8 @@ impl Tracer {
     }
 
     /// Tests a single triangle by original id (the occluder hint of a shadow map texel):
-    /// no traversal. Not counted as a ray; callers count hint tests themselves.
+    /// no traversal; a hit in a cut-out's hole is none. Not counted as a ray; callers count
+    /// hint tests themselves.
     pub fn hits_triangle(&self, tri: u32, ray: &Ray) -> Option<Hit> {
         self.on_triangle::<true>(tri, ray)
     }
@@ -403,6 +446,7 @@ impl Tracer {
         let v = t.map(Vec3A::from);
         let h =
             if INSIDE { intersect_triangle(&pre, &v, ob.tmax) } else { intersect_plane(&pre, &v, ob.tmax) };
+        let h = h.filter(|h| !INSIDE || self.solid(tri, h.bary));
         h.map(|h| Hit { t: h.t / self.scale, tri, bary: h.bary })
     }
 }

@@ -403,3 +403,53 @@ fn a_background_build_answers_as_a_build_at_once() {
     assert_eq!(later.bvh_triangle_count(), now.bvh_triangle_count());
     assert_eq!(later.bvh_triangle_count(), tris.len() - 2);
 }
+
+/// Holes in the triangles of a cut-out: a point of triangle 0 or 1 is a hole where its
+/// barycentric weight of corner 1 is below one half.
+struct HalfHoles;
+
+impl hyrt_tracer::Cutouts for HalfHoles {
+    fn has_holes(&self, tri: u32) -> bool {
+        tri < 2
+    }
+    fn solid(&self, _tri: u32, bary: [f32; 3]) -> bool {
+        bary[1] >= 0.5
+    }
+}
+
+/// Rays pass through a cut-out's holes, in every query that reports or blocks, and stop on
+/// its solid parts; plane queries ignore holes; a triangle without holes is untouched.
+#[test]
+fn rays_pass_through_cut_out_holes_alone() {
+    // A cut-out quad at z = 2 (triangles 0 and 1), a plain one at z = 1 behind it (2 and 3),
+    // seen from z = 3.
+    let at = |z: f32| grid(1).into_iter().map(move |t| t.map(|p| p + z * Vec3::Z));
+    let tris: Vec<[Vec3; 3]> = at(2.0).chain(at(1.0)).collect();
+    let plain = Tracer::build(&tris);
+    let cut = Tracer::build(&tris).with_cutouts(Box::new(HalfHoles));
+    let mut c = RayCounts::default();
+    let down = |x: f32, y: f32, tmax: f32| Ray::new(vec3(x, y, 3.0), Vec3::NEG_Z, tmax);
+    // Triangle 0 (corners (0,0), (1,0), (1,1)): corner 1's weight at (x, y) is x - y.
+    let (hole, solid) = ((0.4, 0.1), (0.9, 0.1));
+    let hit = |t: &Tracer, (x, y): (f32, f32)| {
+        t.closest_hit(&down(x, y, f32::INFINITY), RayKind::Primary, &mut RayCounts::default())
+    };
+    assert_eq!(hit(&plain, hole).map(|h| h.tri), Some(0));
+    assert_eq!(hit(&cut, hole).map(|h| (h.tri, h.t)), Some((2, 2.0)), "through the hole to the back quad");
+    assert_eq!(hit(&cut, solid).map(|h| (h.tri, h.t)), Some((0, 1.0)));
+    // Occlusion up to just before the back quad.
+    let blocked = |t: &Tracer, (x, y): (f32, f32)| {
+        t.occluded(&down(x, y, 1.5), RayKind::Shadow, &mut RayCounts::default())
+    };
+    assert!(blocked(&plain, hole) && !blocked(&cut, hole) && blocked(&cut, solid));
+    // The hint: a hole in it is no hit, and the traversal then finds nothing either.
+    let before = c.shadow_hint_hits;
+    assert!(!cut.occluded_with_hint(&down(hole.0, hole.1, 1.5), 0, &mut c));
+    assert!(cut.occluded_with_hint(&down(solid.0, solid.1, 1.5), 0, &mut c));
+    assert_eq!(c.shadow_hint_hits, before + 1);
+    let ray = down(hole.0, hole.1, f32::INFINITY);
+    assert!(cut.hits_triangle(0, &ray).is_none() && plain.hits_triangle(0, &ray).is_some());
+    assert_eq!(cut.hit_on_plane(0, &ray), plain.hit_on_plane(0, &ray));
+    // The plain quad behind has no holes, whatever its barycentrics.
+    assert_eq!(cut.hits_triangle(2, &ray), plain.hits_triangle(2, &ray));
+}

@@ -1,0 +1,54 @@
+//! Occluders with holes (alpha cut-outs, `Classifier::cutouts`): the map holds them solid, so
+//! a point they would shadow is a border that only a ray settles, never a decided shadow, and
+//! the tile shortcut does not decide under them; a point they do not cover is decided as
+//! before.
+
+use glam::Vec3;
+use hyrt_shadowmap::{
+    LightMap, MapKind, MapOptions,
+    classify::{Classifier, Decision, Hull, plane_groups, triangle_planes},
+    map::EMPTY,
+};
+
+#[test]
+fn points_under_a_cut_out_are_borders_for_a_ray() {
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    // A floor (ids 0, 1) and a lid half-way to the light over its middle (ids 2, 3).
+    let q =
+        |h: f32, s: f32| [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)];
+    let (floor, lid) = (q(0.0, 2.0), q(1.0, 0.5));
+    let tris = vec![
+        [floor[0], floor[2], floor[1]],
+        [floor[0], floor[3], floor[2]],
+        [lid[0], lid[2], lid[1]],
+        [lid[0], lid[3], lid[2]],
+    ];
+    let planes = triangle_planes(&tris);
+    let opts = MapOptions { kind: MapKind::Cube, resolution: 256, ..MapOptions::default() };
+    let map = LightMap::build(&tris, light, &opts, &[true; 6]);
+    let solid = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0, cutouts: &[] };
+    let holes = [false, false, true, true];
+    let cut = Classifier { cutouts: &holes, ..solid };
+    let under = Vec3::new(0.3, 0.0, -0.2);
+    let (a, b) = (solid.classify(under, 0), cut.classify(under, 0));
+    assert_eq!((a.decision, a.map_border), (Decision::Shadow, false));
+    // Still leaning to shadow, with the lid as the ray's hint; a border, and no suspects to
+    // settle it by (what the holes let through may meet an occluder that no texel holds).
+    assert_eq!((b.decision, b.map_border, b.suspects), (Decision::Shadow, true, [EMPTY; 2]));
+    assert!(b.hint == 2 || b.hint == 3, "{b:?}");
+    // Beside the lid nothing changes.
+    let beside = Vec3::new(1.8, 0.0, 1.8);
+    assert_eq!(solid.classify(beside, 0), cut.classify(beside, 0));
+    assert_eq!(cut.classify(beside, 0).decision, Decision::Lit);
+    // The tile shortcut: shadowed under the solid lid, undecided under the cut-out.
+    let tile = [under, under + Vec3::X * 0.01, under + Vec3::Z * 0.01, under + Vec3::new(0.01, 0.0, 0.01)];
+    assert_eq!(solid.hull(&tile, 0, None, 0), Hull::Shadowed);
+    assert_eq!(cut.hull(&tile, 0, None, 0), Hull::Unknown);
+    // Plane groups never mix triangles with and without holes (the lid's two triangles are
+    // coplanar: one group with or without holes, but apart from a solid twin).
+    let mut twin = tris.clone();
+    twin.push(tris[2]);
+    let g = plane_groups(&triangle_planes(&twin), &[false, false, true, true, false]);
+    assert_eq!((g[2], g[3], g[4]), (2, 2, 4));
+    assert_eq!(plane_groups(&triangle_planes(&twin), &[])[4], 2);
+}

@@ -354,6 +354,14 @@ impl Tracer {
     /// a face the ray enters, then to the smaller triangle id.
     pub fn closest_hit(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> Option<Hit> {
         counts.add(kind, 1);
+        // Two instances: scenes without cut-outs pay no alpha test in the traversal's loop.
+        match &self.cutouts {
+            None => self.closest::<false>(ray),
+            Some(_) => self.closest::<true>(ray),
+        }
+    }
+
+    fn closest<const CUT: bool>(&self, ray: &Ray) -> Option<Hit> {
         let Bvh { bvh, tris, ids, .. } = self.bvh();
         if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
             return None;
@@ -368,7 +376,8 @@ impl Tracer {
         // (t, BVH slot, barycentrics) of the best hit so far.
         let mut best: Option<(f32, usize, [f32; 3])> = None;
         bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
-            let Some(h) = intersect_triangle(&pre, &tris[i], r.tmax).filter(|h| self.solid(ids[i], h.bary))
+            let Some(h) =
+                intersect_triangle(&pre, &tris[i], r.tmax).filter(|h| !CUT || self.solid(ids[i], h.bary))
             else {
                 return f32::INFINITY;
             };
@@ -396,6 +405,13 @@ impl Tracer {
     /// True when anything is hit with `0 < t < ray.tmax`.
     pub fn occluded(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> bool {
         counts.add(kind, 1);
+        match &self.cutouts {
+            None => self.blocked::<false>(ray),
+            Some(_) => self.blocked::<true>(ray),
+        }
+    }
+
+    fn blocked<const CUT: bool>(&self, ray: &Ray) -> bool {
         let Bvh { bvh, tris, ids, .. } = self.bvh();
         if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
             return false;
@@ -403,7 +419,7 @@ impl Tracer {
         let (ob, pre) = self.scaled(ray);
         !bvh.ray_traverse_miss(ob, |r, i| {
             intersect_triangle(&pre, &tris[i], r.tmax)
-                .filter(|h| self.solid(ids[i], h.bary))
+                .filter(|h| !CUT || self.solid(ids[i], h.bary))
                 .map_or(f32::INFINITY, |h| h.t)
         })
     }

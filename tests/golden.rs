@@ -94,3 +94,19 @@ fn hybrid_conference() {
     let spec = root().join("scenes/conference.toml");
     check_with("hybrid-conference", spec.to_str().unwrap(), 160, 120, Options::hybrid());
 }
+
+/// Textures: Dabrovic's Sponza (MTL `map_Kd` JPEGs), by the reference and by the hybrid.
+#[test]
+fn sponza_textured() {
+    let spec = root().join("scenes/sponza.toml");
+    check("sponza", spec.to_str().unwrap(), 160, 120);
+    check_with("hybrid-sponza", spec.to_str().unwrap(), 160, 120, Options::hybrid());
+}
+
+/// Alpha cut-outs: the lattice fence and grille of `scenes/fence.toml` (an MTL `map_d`), seen
+/// and shadowed through their holes, by the hybrid.
+#[test]
+fn hybrid_fence_cut_outs() {
+    let spec = root().join("scenes/fence.toml");
+    check_with("hybrid-fence", spec.to_str().unwrap(), 160, 120, Options::hybrid());
+}

@@ -4,7 +4,8 @@
 //! `cargo run --release --example frames -- SCENE [FRAMES] [reference|hybrid]` (default: 30
 //! frames of the hybrid at 640x480, after a first frame that builds the maps). `HYRT_MAP_RES`
 //! overrides the light maps' resolution; `HYRT_VPLS=N` adds indirect light from `N` VPL paths
-//! by maps (`HYRT_VPL_RAYS=1`: by rays), `HYRT_VPL_RES` and `HYRT_INTERLEAVE` set its knobs.
+//! by maps (`HYRT_VPL_RAYS=1`: by rays), `HYRT_VPL_RES` and `HYRT_INTERLEAVE` set its knobs;
+//! `HYRT_NO_TEXTURES=1` drops the materials' textures.
 
 use std::collections::BTreeMap;
 
@@ -24,6 +25,9 @@ fn main() {
         }
     };
     (scene.settings.width, scene.settings.height) = (640, 480);
+    if std::env::var_os("HYRT_NO_TEXTURES").is_some() {
+        scene.materials.iter_mut().for_each(|m| m.texture = None);
+    }
     let frames: usize = args.get(1).and_then(|n| n.parse().ok()).unwrap_or(30);
     let mut opts = match args.get(2).map(String::as_str) {
         Some("reference") => Options::reference(),

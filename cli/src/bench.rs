@@ -14,6 +14,11 @@
 //! | `vpl-maps` | `--preset reference --indirect maps --vpls N` | 4.4 |
 //! | `hybrid-vpl` | `--preset hybrid --indirect maps --vpls N` | 4.5 |
 //!
+//! A scene with textures is also measured without them (`rt-untextured`, `smerts-untextured`:
+//! `rt` and `smerts-cube` with every material's texture dropped, alternated with the others):
+//! the difference is texture sampling's share of the frame, and the hybrid's speed-up with and
+//! without textures says whether sampling costs it more than the reference.
+//!
 //! PSNR is on display luminance against `rt` (direct light) or `rt-vpl` (with indirect light).
 //! Table 4.3 (SMeRTS on the thesis's GPU tracer) has no CPU counterpart and is not reproduced.
 
@@ -74,6 +79,9 @@ fn configs(vpls: u32) -> Vec<(&'static str, String)> {
         ("hybrid-vpl", format!("--preset hybrid {m}")),
     ]
 }
+
+/// The configurations measured again without textures, on a textured scene: (of, id).
+const UNTEXTURED: [(&str, &str); 2] = [("rt", "rt-untextured"), ("smerts-cube", "smerts-untextured")];
 
 /// The thesis's figures (`docs/thesis.md`, tables 4.1, 4.2, 4.4, 4.5) for a scene of ours.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -164,7 +172,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
         for (id, f) in &flags {
             let words: Vec<&str> = f.split_whitespace().collect();
             let options = Knobs::from_flags(&words)?.options_for(sc)?;
-            cs.push(Config { label: (*id).to_string(), options });
+            cs.push(Config { label: (*id).to_string(), options, scene: None });
         }
         per_scene.push(cs);
     }
@@ -174,7 +182,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
     let bar = crate::cli::progress_bar(frames_per_scene * loaded.len() as u64, "frames", false);
 
     let mut results = Vec::new();
-    for (sc, cs) in loaded.iter().zip(per_scene) {
+    for (sc, mut cs) in loaded.iter().zip(per_scene) {
         eprintln!(
             "{}: {} triangles, {} lights, {}x{}",
             sc.name,
@@ -183,6 +191,18 @@ fn bench(a: &BenchArgs) -> Result<()> {
             sc.settings.width,
             sc.settings.height
         );
+        // Textured scenes: the same frames without their textures, alternated with the
+        // others (module docs).
+        if !sc.textures.is_empty() {
+            let mut plain = sc.clone();
+            plain.materials.iter_mut().for_each(|m| m.texture = None);
+            let plain = std::sync::Arc::new(plain);
+            for (of, id) in UNTEXTURED {
+                let c = cs.iter().find(|c| c.label == of).expect("a bench configuration");
+                cs.push(Config { label: id.to_string(), options: c.options, scene: Some(plain.clone()) });
+            }
+            bar.inc_length(UNTEXTURED.len() as u64 * (1 + u64::from(a.runs)) + u64::from(!a.no_check));
+        }
         let mo = MeasureOptions { runs: a.runs as usize, check: !a.no_check };
         let mut ms = measure::measure(sc, &cs, None, mo, &|label| {
             bar.set_message(format!("{} {label}", sc.name));
@@ -191,8 +211,12 @@ fn bench(a: &BenchArgs) -> Result<()> {
         // PSNR against the matching reference: direct light alone, or with the same VPLs.
         let film = |id: &str| ms.iter().find(|m| m.label == id).map(|m| m.film.clone()).expect("measured");
         let (rt, rt_vpl) = (film("rt"), film("rt-vpl"));
+        // The untextured frames against the untextured reference.
+        let rt_plain = ms.iter().find(|m| m.label == UNTEXTURED[0].1).map(|m| m.film.clone());
         for m in &mut ms {
-            let reference = if cs
+            let reference = if let Some(f) = rt_plain.as_ref().filter(|_| m.label.ends_with("-untextured")) {
+                f
+            } else if cs
                 .iter()
                 .any(|c| c.label == m.label && c.options.indirect != hyrt::render::Indirect::None)
             {
@@ -474,6 +498,38 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         ]);
     }
     s.push_str(&tu.markdown());
+
+    let textured: Vec<&SceneResult> =
+        results.iter().filter(|r| r.configs.iter().any(|m| m.label == UNTEXTURED[0].1)).collect();
+    if !textured.is_empty() {
+        let _ =
+            writeln!(s, "\n### Texture sampling: the textured scenes without their textures (medians, ms)\n");
+        let mut tt = Table::new(
+            &[
+                "scene",
+                "reference textured / untextured",
+                "textures' share",
+                "SMeRTS textured / untextured",
+                "textures' share",
+                "speed-up textured / untextured",
+            ],
+            1,
+        );
+        for r in textured {
+            let ms = |id: &str| r.get(id).frame_ms.median;
+            let (rt, rtu, sm, smu) = (ms("rt"), ms(UNTEXTURED[0].1), ms("smerts-cube"), ms(UNTEXTURED[1].1));
+            let share = |with: f64, without: f64| format!("{:.1} %", 100.0 * (with - without) / with);
+            tt.row(vec![
+                r.scene.clone(),
+                format!("{rt:.1} / {rtu:.1}"),
+                share(rt, rtu),
+                format!("{sm:.1} / {smu:.1}"),
+                share(sm, smu),
+                format!("{} / {}", ratio(rt, sm), ratio(rtu, smu)),
+            ]);
+        }
+        s.push_str(&tt.markdown());
+    }
 
     let _ = writeln!(s, "\n### Table 4.5: both together (SMeRTS + VPL maps) vs the full reference\n");
     let mut t5 = Table::new(

@@ -29,6 +29,9 @@ use hyrt::{
 pub struct Config {
     pub label: String,
     pub options: Options,
+    /// The scene this configuration renders instead of [`measure`]'s (the same scene made
+    /// otherwise, such as without its textures), its frames alternated with the others.
+    pub scene: Option<std::sync::Arc<Scene>>,
 }
 
 /// What measuring one configuration on one scene gave.
@@ -129,7 +132,7 @@ pub fn measure(
     }
     let (mut renderers, mut out) = (Vec::new(), Vec::new());
     for c in configs {
-        let (r, f, cold_ms) = cold_first_frame(scene, c.options);
+        let (r, f, cold_ms) = cold_first_frame(c.scene.as_deref().unwrap_or(scene), c.options);
         progress(&c.label);
         let t = |k: &str| f.stats.time_ms.get(k).copied().unwrap_or(0.0);
         out.push(Measurement {
@@ -186,7 +189,7 @@ pub fn measure(
             if c.options.shadows == Shadows::Rays {
                 continue;
             }
-            let (pairs, pixels) = wrong_visibility(scene, c.options);
+            let (pairs, pixels) = wrong_visibility(c.scene.as_deref().unwrap_or(scene), c.options);
             progress(&c.label);
             (m.wrong_pairs, m.wrong_pixels) = (Some(pairs), Some(pixels));
         }
@@ -208,8 +211,8 @@ mod tests {
         scene.settings.height = 48;
         let reference = Renderer::new(&scene, Options::reference()).render(&|| {}).film;
         let configs = [
-            Config { label: "reference".into(), options: Options::reference() },
-            Config { label: "hybrid".into(), options: Options::hybrid() },
+            Config { label: "reference".into(), options: Options::reference(), scene: None },
+            Config { label: "hybrid".into(), options: Options::hybrid(), scene: None },
         ];
         let calls = std::sync::atomic::AtomicUsize::new(0);
         let mo = MeasureOptions { runs: 3, check: true };

@@ -322,7 +322,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
 
     let mo = MeasureOptions { runs, check: true };
     let exposure = scene.settings.exposure;
-    let ref_config = Config { label: "reference".into(), options: ref_options };
+    let ref_config = Config { label: "reference".into(), options: ref_options, scene: None };
     let mut m = measure(&scene, std::slice::from_ref(&ref_config), None, mo, &progress)?.remove(0);
     m.psnr_db = Some(f64::INFINITY);
     let ref_film = std::mem::replace(&mut m.film, Film::new(0, 0));
@@ -350,7 +350,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
     let mut rows: Vec<Row> = Vec::new();
     let n = combos.len();
     for (i, c) in combos.into_iter().enumerate() {
-        let config = Config { label: c.label.clone(), options: c.options };
+        let config = Config { label: c.label.clone(), options: c.options, scene: None };
         let mut pair = measure(&scene, &[ref_config.clone(), config], None, mo, &progress)?;
         let mut m = pair.remove(1);
         let side_by_side_ref_ms = pair[0].frame_ms.median;

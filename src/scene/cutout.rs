@@ -27,6 +27,7 @@
 use glam::Vec2;
 
 use super::Scene;
+use super::texture::{floor, wrap};
 
 /// Where a [`Mask`]'s alpha is read from in its image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,11 +87,11 @@ impl Mask {
         if !(x.is_finite() && y.is_finite()) {
             return t(0, 0);
         }
-        let (fx, fy) = (x.floor(), y.floor());
-        let (ax, ay) = (x - fx, y - fy);
-        let wrap = |v: f32, n: u32| (v.rem_euclid(n as f32) as u32).min(n - 1);
+        let (fx, fy) = (floor(x), floor(y));
+        let (ax, ay) = (x - fx as f32, y - fy as f32);
         let (x0, y0) = (wrap(fx, self.width), wrap(fy, self.height));
-        let (x1, y1) = ((x0 + 1) % self.width, (y0 + 1) % self.height);
+        let next = |v: u32, n: u32| if v + 1 == n { 0 } else { v + 1 };
+        let (x1, y1) = (next(x0, self.width), next(y0, self.height));
         let top = t(x0, y0) * (1.0 - ax) + t(x1, y0) * ax;
         let bottom = t(x0, y1) * (1.0 - ax) + t(x1, y1) * ax;
         top * (1.0 - ay) + bottom * ay

@@ -161,6 +161,24 @@ pub struct MeshRange {
     pub count: u32,
 }
 
+/// The angle one pixel of an image `height` pixels high subtends at the centre of a vertical
+/// field of view of `fov_y_deg` degrees. Remembered per thread for the last field of view
+/// and height asked (shading asks it for every textured point, and `tan` is a libm call).
+fn pixel_angle(fov_y_deg: f32, height: u32) -> f32 {
+    thread_local! {
+        static LAST: std::cell::Cell<(u32, u32, f32)> = const { std::cell::Cell::new((u32::MAX, 0, 0.0)) };
+    }
+    LAST.with(|last| {
+        let (fov, h, a) = last.get();
+        if (fov, h) == (fov_y_deg.to_bits(), height) {
+            return a;
+        }
+        let a = 2.0 * (fov_y_deg.to_radians() * 0.5).tan() / height.max(1) as f32;
+        last.set((fov_y_deg.to_bits(), height, a));
+        a
+    })
+}
+
 /// Everything a renderer needs.
 ///
 /// Triangles are flattened: triangle `i` has corners `positions[i]`, per-corner shading normals
@@ -361,17 +379,15 @@ impl Scene {
             return (m.diffuse, m.highlight);
         };
         let at = uv[0] * bary[0] + uv[1] * bary[1] + uv[2] * bary[2];
-        let density = texture::uv_per_world(&self.positions[tri as usize], uv);
-        let c = tex.sample(at, texture::footprint(t, self.pixel_angle(), cos, density));
+        let w2 = texture::footprint_squared(t, self.pixel_angle(), cos, &self.positions[tri as usize], uv);
+        let c = tex.sample_squared(at, w2);
         (m.diffuse * c, m.highlight + m.highlight_base * (c - Vec3::ONE))
     }
 
     /// The angle one pixel of the camera subtends vertically (radians, at the image's centre);
     /// 0 without a camera.
     pub fn pixel_angle(&self) -> f32 {
-        self.camera.map_or(0.0, |c| {
-            2.0 * (c.fov_y_deg.to_radians() * 0.5).tan() / self.settings.height.max(1) as f32
-        })
+        self.camera.map_or(0.0, |c| pixel_angle(c.fov_y_deg, self.settings.height))
     }
 
     /// Axis-aligned bounds of all triangles, `None` for an empty scene.

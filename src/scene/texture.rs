@@ -5,7 +5,8 @@
 //!
 //! Level 0 is the image; each next level halves both sides (rounding down, at least one
 //! texel), each of its texels the mean of the 2x2 (or, on an odd side's last row or column,
-//! 2x1, 1x2 or 1x1) texels of the level above it, in linear light.
+//! 2x1, 1x2 or 1x1) texels of the level above it, in linear light, stored as the nearest sRGB
+//! bytes (`Level`).
 //!
 //! # Which level
 //!
@@ -36,12 +37,32 @@ pub struct Texture {
     levels: Vec<Level>,
 }
 
-/// One level of the chain: `width x height` linear RGB texels, row-major, row 0 at the top.
+/// One level of the chain: `width x height` texels, row-major, row 0 at the top, each its
+/// sRGB-encoded RGB bytes and a padding byte.
+///
+/// Why bytes: sampling reads four texels per shading point from levels that do not stay in
+/// cache from frame to frame; four bytes a texel, decoded by a table, move a third of what
+/// linear `f32` triples do. Level 0 decodes to exactly the linear values of its file; the
+/// others are means taken in linear light (from the unrounded level above) and rounded to the
+/// nearest sRGB byte, within half a step of the mean.
 #[derive(Clone, Debug, PartialEq)]
 struct Level {
     width: u32,
     height: u32,
-    texels: Vec<Vec3>,
+    texels: Vec<[u8; 4]>,
+}
+
+/// [`srgb_to_linear`] of every byte.
+fn decode_table() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|c| srgb_to_linear(c as u8)))
+}
+
+/// Linear light `x` to the nearest sRGB byte (IEC 61966-2-1), clamped to `[0, 1]`.
+fn linear_to_srgb8(x: f32) -> u8 {
+    let x = x.clamp(0.0, 1.0);
+    let e = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    (e * 255.0).round().clamp(0.0, 255.0) as u8
 }
 
 /// Decodes an encoded image (PNG or JPEG) named `name` in messages.
@@ -68,14 +89,22 @@ impl Texture {
         if width == 0 || height == 0 || rgb.len() != width as usize * height as usize * 3 {
             return None;
         }
-        let lut: Vec<f32> = (0..=255).map(srgb_to_linear).collect();
-        let texels = rgb
-            .chunks_exact(3)
+        let lut = decode_table();
+        let texels: Vec<[u8; 4]> = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2], 0]).collect();
+        // The chain is made from linear means of the level above before its rounding.
+        let mut linear: Vec<Vec3> = texels
+            .iter()
             .map(|c| Vec3::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]))
             .collect();
         let mut levels = vec![Level { width, height, texels }];
-        while let Some(next) = levels.last().and_then(Level::half) {
-            levels.push(next);
+        let (mut w, mut h) = (width, height);
+        while let Some((w2, h2, next)) = half(w, h, &linear) {
+            let texels = next
+                .iter()
+                .map(|c| [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 0])
+                .collect();
+            levels.push(Level { width: w2, height: h2, texels });
+            (w, h, linear) = (w2, h2, next);
         }
         Some(Self { name: name.to_string(), levels })
     }
@@ -109,14 +138,22 @@ impl Texture {
 
     /// The level a footprint of `w` texture coordinates reads (module docs).
     pub fn level_for(&self, w: f32) -> usize {
+        self.level_for_squared(w * w)
+    }
+
+    /// [`Texture::level_for`] of a footprint whose square is `w2`: `floor(log2(w n))` is
+    /// `floor(floor(log2(w^2 n^2)) / 2)` (halving commutes with `floor` on integers), so no
+    /// square root is taken.
+    pub fn level_for_squared(&self, w2: f32) -> usize {
         let (width, height) = self.size();
-        let t = w * width.max(height) as f32;
+        let n = width.max(height) as f32;
+        let x = w2 * n * n;
         // Below two texels (NaN too): level 0.
-        if t.is_nan() || t < 2.0 {
+        if x.is_nan() || x < 4.0 {
             return 0;
         }
-        // floor(log2(t)) from the exponent, exactly (t is normal and >= 2 here).
-        let k = ((t.to_bits() >> 23) & 0xff) as usize - 127;
+        // floor(log2(x)) from the exponent, exactly (x is normal and >= 4 here).
+        let k = (((x.to_bits() >> 23) & 0xff) as usize - 127) / 2;
         k.min(self.levels.len() - 1)
     }
 
@@ -125,40 +162,53 @@ impl Texture {
     pub fn sample(&self, uv: Vec2, w: f32) -> Vec3 {
         self.levels[self.level_for(w)].bilinear(uv)
     }
+
+    /// [`Texture::sample`] for a footprint whose square is `w2` ([`footprint_squared`]).
+    pub fn sample_squared(&self, uv: Vec2, w2: f32) -> Vec3 {
+        self.levels[self.level_for_squared(w2)].bilinear(uv)
+    }
+}
+
+/// The next level of a `width x height` level of linear texels (module docs): its size and
+/// texels, `None` at 1x1.
+fn half(width: u32, height: u32, texels: &[Vec3]) -> Option<(u32, u32, Vec<Vec3>)> {
+    if width == 1 && height == 1 {
+        return None;
+    }
+    let (w, h) = ((width / 2).max(1), (height / 2).max(1));
+    let mut out = Vec::with_capacity(w as usize * h as usize);
+    for y in 0..h {
+        for x in 0..w {
+            // The texels of this level that texel (x, y) of the next covers.
+            let xs = if width == 1 {
+                0..1
+            } else {
+                2 * x..(2 * x + 2 + u32::from(x == w - 1 && width % 2 == 1)).min(width)
+            };
+            let ys = if height == 1 {
+                0..1
+            } else {
+                2 * y..(2 * y + 2 + u32::from(y == h - 1 && height % 2 == 1)).min(height)
+            };
+            let (mut sum, mut n) = (Vec3::ZERO, 0.0f32);
+            for sy in ys {
+                for sx in xs.clone() {
+                    sum += texels[(sy * width + sx) as usize];
+                    n += 1.0;
+                }
+            }
+            out.push(sum / n);
+        }
+    }
+    Some((w, h, out))
 }
 
 impl Level {
-    /// The next level (module docs), `None` at 1x1.
-    fn half(&self) -> Option<Self> {
-        if self.width == 1 && self.height == 1 {
-            return None;
-        }
-        let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
-        let mut texels = Vec::with_capacity(w as usize * h as usize);
-        for y in 0..h {
-            for x in 0..w {
-                // The texels of this level that texel (x, y) of the next covers.
-                let xs = if self.width == 1 {
-                    0..1
-                } else {
-                    2 * x..(2 * x + 2 + u32::from(x == w - 1 && self.width % 2 == 1)).min(self.width)
-                };
-                let ys = if self.height == 1 {
-                    0..1
-                } else {
-                    2 * y..(2 * y + 2 + u32::from(y == h - 1 && self.height % 2 == 1)).min(self.height)
-                };
-                let (mut sum, mut n) = (Vec3::ZERO, 0.0f32);
-                for sy in ys {
-                    for sx in xs.clone() {
-                        sum += self.texels[(sy * self.width + sx) as usize];
-                        n += 1.0;
-                    }
-                }
-                texels.push(sum / n);
-            }
-        }
-        Some(Self { width: w, height: h, texels })
+    /// Texel `i`, in linear light.
+    #[inline]
+    fn texel(&self, i: usize) -> Vec3 {
+        let (lut, c) = (decode_table(), self.texels[i]);
+        Vec3::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize])
     }
 
     /// Bilinear interpolation of the four texel centres around `uv`, repeating.
@@ -166,18 +216,44 @@ impl Level {
         let (w, h) = (self.width as f32, self.height as f32);
         let (x, y) = (uv.x * w - 0.5, uv.y * h - 0.5);
         if !(x.is_finite() && y.is_finite()) {
-            return self.texels[0];
+            return self.texel(0);
         }
-        let (fx, fy) = (x.floor(), y.floor());
-        let (ax, ay) = (x - fx, y - fy);
-        // Wrapped texel indices; `rem_euclid` of a float keeps huge coordinates in range.
-        let wrap = |v: f32, n: u32| (v.rem_euclid(n as f32) as u32).min(n - 1);
+        let (fx, fy) = (floor(x), floor(y));
+        let (ax, ay) = (x - fx as f32, y - fy as f32);
         let (x0, y0) = (wrap(fx, self.width), wrap(fy, self.height));
-        let (x1, y1) = ((x0 + 1) % self.width, (y0 + 1) % self.height);
-        let t = |x: u32, y: u32| self.texels[(y * self.width + x) as usize];
+        let next = |v: u32, n: u32| if v + 1 == n { 0 } else { v + 1 };
+        let (x1, y1) = (next(x0, self.width), next(y0, self.height));
+        let t = |x: u32, y: u32| self.texel((y * self.width + x) as usize);
         let top = t(x0, y0) * (1.0 - ax) + t(x1, y0) * ax;
         let bottom = t(x0, y1) * (1.0 - ax) + t(x1, y1) * ax;
         top * (1.0 - ay) + bottom * ay
+    }
+}
+
+/// `v.floor()` as an integer, by conversions (without SSE4.1 in the target `f32::floor` is a
+/// call into libm, once per sample). `v` is finite; beyond `i64`'s range it saturates, which
+/// [`wrap`] then takes to some texel of the image.
+#[inline]
+pub(crate) fn floor(v: f32) -> i64 {
+    let i = v as i64;
+    if (i as f32) > v { i - 1 } else { i }
+}
+
+/// Texel index `i` repeated into `0..n` (`n > 0`). Divisions are slow: an index already in
+/// range (coordinates in `[0, 1)`) is itself, a power-of-two side takes a mask (two's
+/// complement makes it the Euclidean remainder for negative `i` too), and only the rest a
+/// remainder.
+#[inline]
+pub(crate) fn wrap(i: i64, n: u32) -> u32 {
+    if (0..i64::from(n)).contains(&i) {
+        i as u32
+    } else if n.is_power_of_two() {
+        i as u32 & (n - 1)
+    } else if let Ok(i) = i32::try_from(i) {
+        // `n <= i32::MAX` for any image: a 32-bit division, a fraction of a 64-bit one.
+        i.rem_euclid(n as i32) as u32
+    } else {
+        i.rem_euclid(i64::from(n)) as u32
     }
 }
 
@@ -190,6 +266,18 @@ impl Level {
 /// grazing views do not blur to the last level.
 pub fn footprint(t: f32, pixel_angle: f32, cos: f32, uv_per_world: f32) -> f32 {
     t * pixel_angle / cos.abs().max(1.0 / 64.0).sqrt() * uv_per_world
+}
+
+/// The square of [`footprint`]`(t, pixel_angle, cos, uv_per_world(p, uv))`, with one square
+/// root where the product takes three (shading asks it for every textured point):
+/// `(t pixel_angle)^2 / max(|cos|, 1/64) * uv area / world area`. 0 for a degenerate triangle.
+pub fn footprint_squared(t: f32, pixel_angle: f32, cos: f32, p: &[Vec3; 3], uv: &[Vec2; 3]) -> f32 {
+    let world = (p[1] - p[0]).cross(p[2] - p[0]).length();
+    let (a, b) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let tex = (a.x * b.y - a.y * b.x).abs();
+    let ta = t * pixel_angle;
+    let w2 = ta * ta * tex / (cos.abs().max(1.0 / 64.0) * world);
+    if w2.is_finite() { w2 } else { 0.0 }
 }
 
 /// `sqrt(uv area / world area)` of a triangle with corners `p` and texture coordinates `uv`:
@@ -227,10 +315,20 @@ mod tests {
         assert_eq!(sizes, [(5, 3), (2, 1), (1, 1)]);
         // Level 1's last texel covers columns 2, 3 and 4 (odd width) of all three rows: 2/3
         // white in linear light, not in sRGB.
-        assert!((t.levels[1].texels[1].x - 2.0 / 3.0).abs() < 1e-6);
-        assert!((t.levels[1].texels[0].x - 0.5).abs() < 1e-6);
-        // The next level averages level 1's two texels (not all 15 of level 0's).
-        assert!((t.levels[2].texels[0].x - (0.5 + 2.0 / 3.0) / 2.0).abs() < 1e-6);
+        // Each within half an sRGB step of the mean (under 0.003 in linear light there).
+        let close = |l: usize, i: usize, want: f32| {
+            let got = t.levels[l].texel(i).x;
+            assert!((got - want).abs() < 0.003, "level {l} texel {i}: {got} for {want}");
+        };
+        close(1, 1, 2.0 / 3.0);
+        close(1, 0, 0.5);
+        // The next level averages level 1's two texels (not all 15 of level 0's), before their
+        // rounding.
+        close(2, 0, (0.5 + 2.0 / 3.0) / 2.0);
+        // Rounding: the byte nearest the encoded value, and back.
+        for c in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb_to_linear(c)), c);
+        }
         assert!(Texture::from_srgb8("e", 0, 4, &[]).is_none());
         assert!(Texture::from_srgb8("short", 2, 2, &[0; 11]).is_none());
     }
@@ -253,7 +351,7 @@ mod tests {
         // Half-way between the last column and the first (wrapping).
         let mid = t.sample(Vec2::new(1.0, 0.25), 0.0);
         assert!((mid.x - 0.5 * srgb_to_linear(180)).abs() < 1e-6);
-        assert_eq!(t.sample(Vec2::new(f32::NAN, 0.5), 0.0), t.levels[0].texels[0]);
+        assert_eq!(t.sample(Vec2::new(f32::NAN, 0.5), 0.0), t.levels[0].texel(0));
     }
 
     #[test]
@@ -280,5 +378,12 @@ mod tests {
         assert!((footprint(10.0, 0.001, 1.0, 0.5) - 0.005).abs() < 1e-9);
         assert!((footprint(10.0, 0.001, 0.25, 0.5) - 0.01).abs() < 1e-9);
         assert_eq!(footprint(10.0, 0.001, 0.0, 0.5), footprint(10.0, 0.001, 1.0 / 64.0, 0.5));
+        // The squared form, without its square roots: the same up to rounding.
+        for cos in [1.0, 0.25, 0.0] {
+            let w = footprint(10.0, 0.001, cos, uv_per_world(&p, &uv));
+            let w2 = footprint_squared(10.0, 0.001, cos, &p, &uv);
+            assert!((w2 / (w * w) - 1.0).abs() < 1e-6, "{w2} {w}");
+        }
+        assert_eq!(footprint_squared(10.0, 0.001, 1.0, &[Vec3::ZERO; 3], &uv), 0.0);
     }
 }

@@ -132,6 +132,17 @@ enum Texels {
     },
 }
 
+/// Triangles with holes (alpha cut-outs) for [`VplMap::build_with_holes`].
+pub struct Holes<'a> {
+    /// Per triangle id, whether it has holes.
+    pub cutouts: &'a [bool],
+    /// The map's triangles with those that have holes left out (a non-finite corner).
+    pub solid: &'a [[Vec3; 3]],
+    /// Whether the ray from the map's origin in unit direction `dir` meets triangle `id` (one
+    /// with holes) in a hole.
+    pub hole: &'a (dyn Fn(u32, Vec3) -> bool + Sync),
+}
+
 /// One paraboloid hemisphere of planes or 16-bit depths (module docs).
 #[derive(Clone, Debug)]
 pub struct VplMap {
@@ -155,17 +166,52 @@ impl VplMap {
         opts: &MapOptions,
         format: VplFormat,
     ) -> Self {
+        Self::build_with_holes(tris, planes, origin, axis, opts, format, None)
+    }
+
+    /// [`VplMap::build`], with the texels that see a hole of a cut-out ([`Holes`]) holding
+    /// what lies behind it instead: the surface the same texel sees with the cut-outs left out.
+    /// Decided at the texel's centre, as an alpha-tested shadow map does: a lookup casts no
+    /// ray to settle a texel that straddles a hole's edge.
+    pub fn build_with_holes(
+        tris: &[[Vec3; 3]],
+        planes: &[Plane],
+        origin: Vec3,
+        axis: Vec3,
+        opts: &MapOptions,
+        format: VplFormat,
+        holes: Option<&Holes>,
+    ) -> Self {
         let map = LightMap::build_hemisphere(tris, origin, axis, opts);
         let frame = Frame::around(axis.as_dvec3());
         let res = map.resolution();
-        // The plane seen by texel (x, y) (outside the disc: by the nearest texel inside).
-        let plane_at = |x: u32, y: u32| -> Option<&Plane> {
-            let (sx, sy) = if disc_contains(res, x, y) {
-                (x, y)
+        // The texel (x, y) stands for (outside the disc: the nearest texel inside).
+        let source = |x: u32, y: u32| -> Option<(u32, u32)> {
+            if disc_contains(res, x, y) {
+                Some((x, y))
             } else {
-                nearest_in_disc(res, x as f32 + 0.5, y as f32 + 0.5)?
+                nearest_in_disc(res, x as f32 + 0.5, y as f32 + 0.5)
+            }
+        };
+        // With cut-outs: the map without them, drawn if some texel sees a hole.
+        let behind = holes.and_then(|h| {
+            let sees_hole = |x: u32, y: u32| {
+                let id = map.id(0, x, y);
+                h.cutouts.get(id as usize).is_some_and(|&c| c)
+                    && (h.hole)(id, centre_dir_f64(frame, res, x, y).as_vec3())
             };
-            let id = map.id(0, sx, sy);
+            let any = (0..res)
+                .into_par_iter()
+                .any(|y| (0..res).any(|x| disc_contains(res, x, y) && sees_hole(x, y)));
+            any.then(|| (LightMap::build_hemisphere(h.solid, origin, axis, opts), sees_hole))
+        });
+        // The plane seen by texel (x, y).
+        let plane_at = |x: u32, y: u32| -> Option<&Plane> {
+            let (sx, sy) = source(x, y)?;
+            let id = match &behind {
+                Some((solid, sees_hole)) if sees_hole(sx, sy) => solid.id(0, sx, sy),
+                _ => map.id(0, sx, sy),
+            };
             planes.get(id as usize).filter(|_| id != EMPTY)
         };
         let n = res as usize * res as usize;

@@ -52,3 +52,54 @@ fn points_under_a_cut_out_are_borders_for_a_ray() {
     assert_eq!((g[2], g[3], g[4]), (2, 2, 4));
     assert_eq!(plane_groups(&triangle_planes(&twin), &[])[4], 2);
 }
+
+/// A VPL map's texels that see a cut-out's hole hold what lies behind it; its solid parts
+/// stay. Here a lid over a floor is all hole to the left of `x = 0` and solid to the right, as
+/// the test says at each texel's centre.
+#[test]
+fn vpl_map_texels_see_through_holes() {
+    use hyrt_shadowmap::vpl_map::{Holes, VplFormat, VplMap};
+    let o = Vec3::new(0.0, 2.0, 0.0);
+    let q =
+        |h: f32, s: f32| [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)];
+    let (floor, lid) = (q(0.0, 3.0), q(1.0, 0.5));
+    let tris = vec![
+        [floor[0], floor[2], floor[1]],
+        [floor[0], floor[3], floor[2]],
+        [lid[0], lid[2], lid[1]],
+        [lid[0], lid[3], lid[2]],
+    ];
+    let planes = triangle_planes(&tris);
+    let opts = MapOptions { kind: MapKind::Cube, resolution: 64, ..MapOptions::default() };
+    let cutouts = [false, false, true, true];
+    let gone = [Vec3::NAN; 3];
+    let solid = vec![tris[0], tris[1], gone, gone];
+    let left_hole = |_: u32, dir: Vec3| dir.x < 0.0;
+    let holes = Holes { cutouts: &cutouts, solid: &solid, hole: &left_hole };
+    let down = Vec3::NEG_Y;
+    let planes_of = |m: &VplMap| m.planes().expect("planes").to_vec();
+    let with_lid = planes_of(&VplMap::build(&tris, &planes, o, down, &opts, VplFormat::Planes));
+    let without = planes_of(&VplMap::build(&solid, &planes, o, down, &opts, VplFormat::Planes));
+    let cut = VplMap::build_with_holes(&tris, &planes, o, down, &opts, VplFormat::Planes, Some(&holes));
+    let got = planes_of(&cut);
+    let (mut through, mut kept) = (0, 0);
+    for (i, g) in got.iter().enumerate() {
+        let (x, y) = (i as u32 % 64, i as u32 / 64);
+        if with_lid[i] == without[i] {
+            assert_eq!(*g, with_lid[i]);
+            continue;
+        }
+        // A texel that sees the lid: the floor behind it on the left, the lid on the right.
+        if cut.centre_dir(x, y).x < 0.0 {
+            assert_eq!(*g, without[i], "texel ({x}, {y})");
+            through += 1;
+        } else {
+            assert_eq!(*g, with_lid[i], "texel ({x}, {y})");
+            kept += 1;
+        }
+    }
+    assert!(through > 50 && kept > 50, "{through} through, {kept} kept");
+    // No cut-outs: the plain map.
+    let none = VplMap::build_with_holes(&tris, &planes, o, down, &opts, VplFormat::Planes, None);
+    assert_eq!(planes_of(&none), with_lid);
+}

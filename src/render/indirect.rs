@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::Vec3;
-use hyrt_shadowmap::vpl_map::VplMap;
+use hyrt_shadowmap::vpl_map::{Holes, VplMap};
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
@@ -172,6 +172,20 @@ impl Renderer<'_> {
                     }
                     _ => vpls.iter().map(|_| None).collect(),
                 };
+                // Cut-outs: a texel that sees a hole holds what lies behind it (decided at the
+                // texel's centre, with the tracer's plane hit and the scene's alpha test).
+                let cutouts = self.cutouts();
+                let solid: Vec<[Vec3; 3]> = if cutouts.is_empty() {
+                    Vec::new()
+                } else {
+                    let gone = [Vec3::NAN; 3];
+                    self.scene
+                        .positions
+                        .iter()
+                        .zip(cutouts)
+                        .map(|(t, &c)| if c { gone } else { *t })
+                        .collect()
+                };
                 // Maps in parallel as well as inside each build: a small map's build has too
                 // little work per parallel step to keep both cores busy alone.
                 let new: Vec<(usize, VplMap)> = (0..vpls.len())
@@ -179,15 +193,23 @@ impl Renderer<'_> {
                     .filter(|&i| kept[i].is_none())
                     .map(|i| {
                         let v = &vpls[i];
+                        let hole = |id: u32, dir: Vec3| {
+                            let ray = hyrt_tracer::Ray::new(v.position, dir, f32::INFINITY);
+                            self.tracer
+                                .hit_on_plane(id, &ray)
+                                .is_some_and(|h| !self.scene.solid_at(id, h.bary))
+                        };
+                        let holes = Holes { cutouts, solid: &solid, hole: &hole };
                         (
                             i,
-                            VplMap::build(
+                            VplMap::build_with_holes(
                                 &self.scene.positions,
                                 planes,
                                 v.position,
                                 v.normal,
                                 &opts.map,
                                 opts.format,
+                                (!cutouts.is_empty()).then_some(&holes),
                             ),
                         )
                     })

@@ -266,6 +266,23 @@ choice! {
     }
 }
 
+choice! {
+    /// How light maps hold alpha cut-outs ([`ShadowOptions::cutouts`]).
+    #[derive(Default)]
+    pub enum CutoutMaps {
+        /// Paged maps test each cut-out texel's centre: a texel that sees a hole holds what
+        /// lies behind it (the page drawn again without cut-outs), so points decide from the
+        /// map like any other, and a footprint that straddles a hole's edge is a border. A hole
+        /// narrower than a texel is missed as a thin occluder is. Whole maps hold cut-outs solid,
+        /// as with `rays`.
+        #[default]
+        Texels = "texels",
+        /// Cut-outs are drawn solid, and every point that one would shadow is left to its shadow
+        /// ray: exact, with no texel tests, and a ray for every point under a cut-out.
+        Rays = "rays",
+    }
+}
+
 /// The knobs of map-based shadows (ignored by `Shadows::Rays`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowOptions {
@@ -285,6 +302,8 @@ pub struct ShadowOptions {
     pub dilate: u32,
     pub mirror: MirrorShadows,
     pub ambiguous: Ambiguous,
+    /// How light maps hold alpha cut-outs.
+    pub cutouts: CutoutMaps,
 }
 
 impl Default for ShadowOptions {
@@ -302,6 +321,7 @@ impl Default for ShadowOptions {
             dilate: 0,
             mirror: MirrorShadows::default(),
             ambiguous: Ambiguous::default(),
+            cutouts: CutoutMaps::default(),
         }
     }
 }
@@ -553,6 +573,13 @@ pub const KNOBS: &[Knob] = &[
         "SMeRTS: a pair whose map footprint is a border only because an occluder lies within the bias band (a crease, a contact): `rays` casts the whole shadow ray, `triangles` tests those triangles alone with it (fewer rays, a little less accurate: occluders the map missed stay missed).",
         choice Ambiguous,
         shadow.ambiguous
+    ),
+    knob!(
+        "cutout-maps",
+        "MODE",
+        "Alpha cut-outs in paged light maps: `texels` (each texel's centre tested: holes hold what lies behind; borders go to rays) or `rays` (drawn solid; every point a cut-out would shadow gets its ray).",
+        choice CutoutMaps,
+        shadow.cutouts
     ),
     knob!(
         "mirror-shadows",

@@ -252,9 +252,11 @@ pub struct Classifier<'a> {
     /// its own surface's neighbours, and an occluder that the reference's offset shadow ray
     /// might skip is left to a ray.
     pub point_error: f32,
-    /// Per triangle id, whether it has holes (alpha cut-outs); empty when none has. The map
-    /// holds such a triangle as solid, so where its texel would shadow a point, the point is
-    /// undecided instead: a ray, which sees the holes, decides (module docs).
+    /// Per triangle id, whether it has holes (alpha cut-outs); empty when none has. A map that
+    /// does not [resolve holes](LightMap::resolves_holes) holds such a triangle solid, so where
+    /// its texel would shadow a point, the point is undecided instead: a ray, which sees the
+    /// holes, decides. A map that resolves them decides as for any occluder, at its texels'
+    /// centres: a footprint that straddles a hole's edge disagrees, and is a border.
     pub cutouts: &'a [bool],
 }
 
@@ -602,7 +604,7 @@ impl Classifier<'_> {
             };
             if !(t > near && t < r - tol) {
                 LIT
-            } else if self.has_holes(id) {
+            } else if self.has_holes(id) && !map.resolves_holes() {
                 CUTOUT
             } else if t < r - margin {
                 SHADOW

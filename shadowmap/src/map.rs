@@ -224,9 +224,11 @@ const PAGE_REGIONS: usize = ((PAGE / REGION) * (PAGE / REGION)) as usize;
 /// receivers seen at one texel per pixel (the resolution guide in [`crate::paged`]).
 pub const MAX_LEVEL: u8 = 17;
 
-/// Id returned by texel lookups in a page that was not drawn: the map cannot tell, so the
-/// classifier leaves the point to a ray. Distinct from every triangle id a map draws (ids from
-/// `ABSENT` on are not drawn).
+/// Id returned by texel lookups in a page that was not drawn, and held by a texel whose centre
+/// sees a cut-out's hole with another cut-out along its ray
+/// ([`LightMap::build_pages_with_holes`]): the map cannot tell, so the classifier leaves the
+/// point to a ray. Distinct from every triangle id a map draws (ids from `ABSENT` on are not
+/// drawn).
 pub const ABSENT: u32 = EMPTY - 2;
 
 /// One page of a map: which level, face and page of it.
@@ -694,6 +696,32 @@ pub struct LightMap {
     pages_rasterized: u64,
     /// Made by [`LightMap::build_pages`].
     paged: bool,
+    /// Made with [`Holes`]: a texel of a triangle with holes is solid at its centre, and a texel
+    /// whose centre sees a hole holds what lies behind it ([`LightMap::resolves_holes`]).
+    holes: bool,
+}
+
+/// Triangles with holes (alpha cut-outs) for maps that resolve them texel by texel
+/// ([`LightMap::build_pages_with_holes`], [`crate::vpl_map::VplMap::build_with_holes`]): the map
+/// knows no textures, so the caller says where a texel's centre meets a hole.
+pub struct Holes<'a> {
+    /// Per triangle id, whether it has holes.
+    pub cutouts: &'a [bool],
+    /// The triangles with those that have holes left out (a non-finite corner), for maps drawn
+    /// in one piece (VPL maps); paged maps leave them out of each page's triangles instead and
+    /// may be given an empty slice.
+    pub solid: &'a [[Vec3; 3]],
+    /// Whether the ray from the map's origin in unit direction `dir` meets triangle `id` (one
+    /// with holes) in a hole.
+    pub hole: &'a (dyn Fn(u32, Vec3) -> bool + Sync),
+}
+
+impl Holes<'_> {
+    /// Whether the texel holding `id`, whose centre lies in direction `dir`, sees a hole.
+    #[inline]
+    pub fn sees_hole(&self, id: u32, dir: Vec3) -> bool {
+        self.cutouts.get(id as usize).is_some_and(|&c| c) && (self.hole)(id, dir)
+    }
 }
 
 /// The rasterizer's options for light maps: reversed-Z, ids only, no culling, the tracer's tie.
@@ -783,6 +811,7 @@ impl LightMap {
             faces_rasterized: 0,
             pages_rasterized: 0,
             paged,
+            holes: false,
         }
     }
 
@@ -849,6 +878,25 @@ impl LightMap {
         pages: &[PageKey],
         groups: &[u32],
     ) -> Self {
+        Self::build_pages_with_holes(tris, light, opts, pages, groups, None)
+    }
+
+    /// [`LightMap::build_pages`], resolving cut-outs' holes texel by texel: a texel whose
+    /// centre meets a triangle with holes in a hole holds what the same texel sees with those
+    /// triangles left out (the page drawn again without them, where it has such a texel). The
+    /// map then [`resolves_holes`](LightMap::resolves_holes), as an alpha-tested shadow map
+    /// does at its texels' centres.
+    ///
+    /// # Panics
+    /// If `opts.kind` is not [`MapKind::Cube`].
+    pub fn build_pages_with_holes(
+        tris: &[[Vec3; 3]],
+        light: Vec3,
+        opts: &MapOptions,
+        pages: &[PageKey],
+        groups: &[u32],
+        holes: Option<&Holes>,
+    ) -> Self {
         assert_eq!(opts.kind, MapKind::Cube, "paged maps are cube maps");
         let mut pages: Vec<PageKey> = pages
             .iter()
@@ -867,6 +915,7 @@ impl LightMap {
         let (valid, near) =
             if pages.is_empty() { (Vec::new(), 1.0) } else { usable_triangles(tris, light, Layout::Cube) };
         let mut map = Self::empty(Layout::Cube, PAGE, light, near, true);
+        map.holes = holes.is_some();
         if pages.is_empty() {
             return map;
         }
@@ -921,6 +970,9 @@ impl LightMap {
                     tris_out.clear();
                     page_clip_all(tris, bin, l, near, key, (axis, sign, s, t), tris_out);
                     rasterizer.rasterize_into(tris_out, bin, PAGE, PAGE, &PAGE_RASTER, target);
+                    if let Some(h) = holes {
+                        see_through_holes(h, key, bin, (tris, l, near), rasterizer, target);
+                    }
                     // The page is the target itself: a cube face at a paged level is a whole
                     // number of pages, and empty texels already hold EMPTY. A page of one id,
                     // or of a few, is kept as that id or a palette (`Face::pack_pages`): its
@@ -952,6 +1004,13 @@ impl LightMap {
         map.triangles_drawn += triangles;
         map.faces_rasterized += faces.iter().filter(|&&f| f).count() as u32;
         map
+    }
+
+    /// Whether the map resolves cut-outs' holes at its texels' centres
+    /// ([`LightMap::build_pages_with_holes`]); otherwise a texel of a triangle with holes holds it
+    /// solid.
+    pub fn resolves_holes(&self) -> bool {
+        self.holes
     }
 
     /// Stores a whole face from the rasterizer's row-major ids and reversed-Z depths: every
@@ -1062,17 +1121,13 @@ impl LightMap {
     /// The unit direction (from the light) of the continuous texel position `(x, y)` on `face`
     /// at level `level`.
     pub fn texel_dir_at(&self, face: u8, level: u8, x: f64, y: f64) -> Vec3 {
+        if self.layout == Layout::Cube {
+            return cube_texel_dir(face, self.resolution_at(level), x, y);
+        }
         let inv = 2.0 / f64::from(self.resolution_at(level));
         let (s, t) = (x * inv - 1.0, 1.0 - y * inv);
         let d = match self.layout {
-            Layout::Cube => {
-                let (axis, sign, si, ti) = CubeFace::ALL[usize::from(face.min(5))].axes();
-                let mut d = DVec3::ZERO;
-                d[axis] = f64::from(sign);
-                d[si] = s;
-                d[ti] = t;
-                d
-            }
+            Layout::Cube => unreachable!("returned above"),
             Layout::Dual | Layout::Hemisphere(_) => {
                 // Inverse of (u, v) = (x, y) / (1 + z) on the unit sphere (crate::paraboloid).
                 let r2 = s * s + t * t;
@@ -1423,7 +1478,10 @@ impl LightMap {
         );
         if !self.drawn.iter().any(|&d| d) {
             self.near = other.near;
+            self.holes = other.holes;
         }
+        // Resolved only if every part is.
+        self.holes &= other.holes;
         let nf = self.layout.face_count();
         self.triangles_drawn += other.triangles_drawn;
         self.faces_rasterized += other.faces_rasterized;
@@ -1660,6 +1718,61 @@ fn finish_page(
                 if (x0..x1).contains(&gx) { (ids[row + x], depth[row + x]) } else { (EMPTY, 0.0) };
         }
     }
+}
+
+/// The texels of page `key` (drawn into `target` from the triangles `bin`) whose centre meets
+/// a triangle with holes in a hole: given the id that the page drawn without those triangles
+/// has there (`LightMap::build_pages_with_holes`).
+fn see_through_holes(
+    h: &Holes,
+    key: &PageKey,
+    bin: &[u32],
+    (tris, light, near): (&[[Vec3; 3]], DVec3, f32),
+    rasterizer: &mut Rasterizer,
+    target: &mut Target,
+) {
+    let res = PAGE << key.level;
+    let (x0, y0) = (key.px * PAGE, key.py * PAGE);
+    let holes: Vec<usize> = (0..target.id.len())
+        .filter(|&i| {
+            let id = target.id[i];
+            h.cutouts.get(id as usize).is_some_and(|&c| c) && {
+                let (x, y) = (x0 + i as u32 % PAGE, y0 + i as u32 / PAGE);
+                h.sees_hole(id, cube_texel_dir(key.face, res, f64::from(x) + 0.5, f64::from(y) + 0.5))
+            }
+        })
+        .collect();
+    if holes.is_empty() {
+        return;
+    }
+    let (cut, solid): (Vec<u32>, Vec<u32>) =
+        bin.iter().partition(|&&t| h.cutouts.get(t as usize).is_some_and(|&c| c));
+    let axes = CubeFace::ALL[usize::from(key.face)].axes();
+    let mut clipped = Vec::new();
+    page_clip_all(tris, &solid, light, near, key, axes, &mut clipped);
+    let mut behind = Target::default();
+    rasterizer.rasterize_into(&clipped, &solid, PAGE, PAGE, &PAGE_RASTER, &mut behind);
+    // Where the texel's ray crosses another cut-out too (before or after the hole), what lies
+    // behind the hole is not the map without cut-outs: the texel cannot tell (a ray decides).
+    clipped.clear();
+    page_clip_all(tris, &cut, light, near, key, axes, &mut clipped);
+    let crossings = hyrt_raster::coverage_count(&clipped, PAGE, PAGE, &PAGE_RASTER);
+    for i in holes {
+        target.id[i] = if crossings[i] > 1 { ABSENT } else { behind.id[i] };
+    }
+}
+
+/// The unit direction (from the light) of the continuous texel position `(x, y)` of cube face
+/// `face` at `res` texels a side.
+fn cube_texel_dir(face: u8, res: u32, x: f64, y: f64) -> Vec3 {
+    let inv = 2.0 / f64::from(res);
+    let (s, t) = (x * inv - 1.0, 1.0 - y * inv);
+    let (axis, sign, si, ti) = CubeFace::ALL[usize::from(face.min(5))].axes();
+    let mut d = DVec3::ZERO;
+    d[axis] = f64::from(sign);
+    d[si] = s;
+    d[ti] = t;
+    d.normalize().as_vec3()
 }
 
 /// [`page_clip_all`] of one triangle.

@@ -80,6 +80,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::classify::Plane;
+pub use crate::map::Holes;
 use crate::map::{EMPTY, LightMap, MapOptions, disc_contains, nearest_in_disc};
 use crate::tess::Frame;
 
@@ -130,17 +131,6 @@ enum Texels {
         inv_scale: f32,
         bits: Vec<u16>,
     },
-}
-
-/// Triangles with holes (alpha cut-outs) for [`VplMap::build_with_holes`].
-pub struct Holes<'a> {
-    /// Per triangle id, whether it has holes.
-    pub cutouts: &'a [bool],
-    /// The map's triangles with those that have holes left out (a non-finite corner).
-    pub solid: &'a [[Vec3; 3]],
-    /// Whether the ray from the map's origin in unit direction `dir` meets triangle `id` (one
-    /// with holes) in a hole.
-    pub hole: &'a (dyn Fn(u32, Vec3) -> bool + Sync),
 }
 
 /// One paraboloid hemisphere of planes or 16-bit depths (module docs).
@@ -195,11 +185,8 @@ impl VplMap {
         };
         // With cut-outs: the map without them, drawn if some texel sees a hole.
         let behind = holes.and_then(|h| {
-            let sees_hole = |x: u32, y: u32| {
-                let id = map.id(0, x, y);
-                h.cutouts.get(id as usize).is_some_and(|&c| c)
-                    && (h.hole)(id, centre_dir_f64(frame, res, x, y).as_vec3())
-            };
+            let sees_hole =
+                |x: u32, y: u32| h.sees_hole(map.id(0, x, y), centre_dir_f64(frame, res, x, y).as_vec3());
             let any = (0..res)
                 .into_par_iter()
                 .any(|y| (0..res).any(|x| disc_contains(res, x, y) && sees_hole(x, y)));

@@ -103,3 +103,56 @@ fn vpl_map_texels_see_through_holes() {
     let none = VplMap::build_with_holes(&tris, &planes, o, down, &opts, VplFormat::Planes, None);
     assert_eq!(planes_of(&none), with_lid);
 }
+
+/// Paged maps that resolve holes: a texel whose centre sees a cut-out's hole holds what lies
+/// behind it; where another cut-out lies along its ray too, the map cannot tell (`ABSENT`).
+#[test]
+fn paged_texels_see_through_holes_unless_another_cut_out_is_along_the_ray() {
+    use hyrt_shadowmap::{ABSENT, PageKey, map::Holes};
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    let q =
+        |h: f32, s: f32| [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)];
+    let quad = |c: [Vec3; 4]| [[c[0], c[2], c[1]], [c[0], c[3], c[2]]];
+    let mut tris: Vec<[Vec3; 3]> = quad(q(0.0, 3.0)).to_vec();
+    tris.extend(quad(q(1.0, 0.5)));
+    let opts = MapOptions { kind: MapKind::Cube, ..MapOptions::default() };
+    let face = LightMap::face_of(MapKind::Cube, Vec3::NEG_Y);
+    let pages = [PageKey { level: 0, face, px: 0, py: 0 }];
+    let left_hole = |_: u32, dir: Vec3| dir.x < 0.0;
+    let cutouts = [false, false, true, true, true, true];
+    let holes = Holes { cutouts: &cutouts, solid: &[], hole: &left_hole };
+    let plain = LightMap::build_pages(&tris, light, &opts, &pages, &[]);
+    let cut = LightMap::build_pages_with_holes(&tris, light, &opts, &pages, &[], Some(&holes));
+    assert!(cut.resolves_holes() && !plain.resolves_holes());
+    let (mut through, mut kept) = (0, 0);
+    for y in 0..32 {
+        for x in 0..32 {
+            let (a, b) = (plain.id_at(0, face, x, y), cut.id_at(0, face, x, y));
+            if a < 2 {
+                assert_eq!(a, b);
+            } else if cut.texel_dir_at(face, 0, f64::from(x) + 0.5, f64::from(y) + 0.5).x < 0.0 {
+                assert!(b < 2, "({x}, {y}): {b}");
+                through += 1;
+            } else {
+                assert_eq!(a, b);
+                kept += 1;
+            }
+        }
+    }
+    assert!(through > 20 && kept > 20, "{through} through, {kept} kept");
+    // A second cut-out under the first: behind a hole of the first lies the second, which the
+    // map without cut-outs would not show.
+    tris.extend(quad(q(0.5, 1.0)));
+    let cut = LightMap::build_pages_with_holes(&tris, light, &opts, &pages, &[], Some(&holes));
+    let (mut absent, mut lid) = (0, 0);
+    for y in 0..32 {
+        for x in 0..32 {
+            match cut.id_at(0, face, x, y) {
+                ABSENT => absent += 1,
+                2 | 3 => lid += 1,
+                _ => {}
+            }
+        }
+    }
+    assert!(absent > 20 && lid > 20, "{absent} absent, {lid} on the lid");
+}

@@ -40,11 +40,14 @@ impl Plan {
         let mut plan = Plan::default();
         let tris = scene.triangle_count();
         plan.add(true, Pass::BvhBuild, format!("ray casting needs a BVH over {tris} triangles"));
+        // Alpha cut-outs: how many triangles have holes, which every visibility path honours.
+        let cut = scene.cutout_flags().iter().filter(|&&c| c).count();
+        let holes = if cut > 0 { " or sees a cut-out's hole" } else { "" };
         let vis = match opts.visibility {
             Visibility::Rays => "rays: one primary ray per pixel".to_string(),
             Visibility::Raster => {
                 format!(
-                    "raster: z-buffer of {tris} triangles, hit points on the visible triangle (a primary ray only where a pixel's ray leaves it)"
+                    "raster: z-buffer of {tris} triangles, hit points on the visible triangle (a primary ray only where a pixel's ray leaves it{holes})"
                 )
             }
         };
@@ -88,6 +91,15 @@ impl Plan {
                     "{kind} maps of {n}x{n} per face, only faces that camera hits fall on, built once and cached",
                     n = sh.map.resolution
                 )
+            };
+            let maps = match (cut, paged && sh.cutouts == crate::options::CutoutMaps::Texels) {
+                (0, _) => maps,
+                (n, true) => format!(
+                    "{maps}; {n} cut-out triangles tested at each texel's centre (holes hold what lies behind)"
+                ),
+                (n, false) => format!(
+                    "{maps}; {n} cut-out triangles drawn solid (every point one would shadow gets its ray)"
+                ),
             };
             match opts.shadows {
                 Shadows::Rays => {

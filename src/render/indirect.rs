@@ -173,7 +173,7 @@ impl Renderer<'_> {
                     _ => vpls.iter().map(|_| None).collect(),
                 };
                 // Cut-outs: a texel that sees a hole holds what lies behind it (decided at the
-                // texel's centre, with the tracer's plane hit and the scene's alpha test).
+                // texel's centre, `shadows::sees_hole`).
                 let cutouts = self.cutouts();
                 let solid: Vec<[Vec3; 3]> = if cutouts.is_empty() {
                     Vec::new()
@@ -193,12 +193,8 @@ impl Renderer<'_> {
                     .filter(|&i| kept[i].is_none())
                     .map(|i| {
                         let v = &vpls[i];
-                        let hole = |id: u32, dir: Vec3| {
-                            let ray = hyrt_tracer::Ray::new(v.position, dir, f32::INFINITY);
-                            self.tracer
-                                .hit_on_plane(id, &ray)
-                                .is_some_and(|h| !self.scene.solid_at(id, h.bary))
-                        };
+                        let hole =
+                            |id: u32, dir: Vec3| super::shadows::sees_hole(self.scene, v.position, id, dir);
                         let holes = Holes { cutouts, solid: &solid, hole: &hole };
                         (
                             i,

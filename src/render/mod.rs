@@ -39,7 +39,8 @@ pub use surface::SurfaceHit;
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
 
 pub use crate::options::{
-    Ambiguous, Borders, Indirect, LightMaps, MirrorShadows, Options, ShadowOptions, Shadows, Visibility,
+    Ambiguous, Borders, CutoutMaps, Indirect, LightMaps, MirrorShadows, Options, ShadowOptions, Shadows,
+    Visibility,
 };
 
 /// Per-frame statistics.
@@ -214,6 +215,7 @@ impl<'a> Renderer<'a> {
             || a.light_maps != b.light_maps
             || a.map_detail != b.map_detail
             || a.map_budget != b.map_budget
+            || a.cutouts != b.cutouts
         {
             // Which pages (or faces) the view needs depends on all of these but the resolution
             // and tessellation of whole maps.

@@ -33,6 +33,7 @@ use hyrt_shadowmap::{
     EMPTY, LightMap, MapCoord, MapKind, PageKey,
     classify::Decision,
     classify::{Classifier, Hull, Lookup, Plane},
+    map::Holes,
     paged::{self, LightTerms, PageRect, Resolution},
 };
 use hyrt_tracer::{Hit, PlaneSide, RayCounts, RayKind, plane_side, spawn_ray_to};
@@ -40,7 +41,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::gather::ShadePoint;
-use super::{Ambiguous, Borders, FrameStats, LightMaps, MirrorShadows, Renderer, Shadows, SurfaceHit};
+use super::{
+    Ambiguous, Borders, CutoutMaps, FrameStats, LightMaps, MirrorShadows, Renderer, Shadows, SurfaceHit,
+};
 
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
@@ -815,12 +818,18 @@ impl Renderer<'_> {
                     .par_iter()
                     .map(|job| {
                         let t = Instant::now();
-                        let map = LightMap::build_pages(
+                        let light = lights[job.light].position;
+                        // Cut-outs: each texel's centre decides whether it sees a hole.
+                        let hole = |id: u32, dir: Vec3| sees_hole(self.scene, light, id, dir);
+                        let holes = Holes { cutouts: self.cutouts(), solid: &[], hole: &hole };
+                        let map = LightMap::build_pages_with_holes(
                             &self.scene.positions,
-                            lights[job.light].position,
+                            light,
                             &self.options.shadow.map,
                             &job.draw,
                             groups,
+                            (!self.cutouts().is_empty() && self.options.shadow.cutouts == CutoutMaps::Texels)
+                                .then_some(&holes),
                         );
                         (map, super::ms(t))
                     })
@@ -1237,6 +1246,24 @@ fn settle(r: &Renderer, lk: &Lookup, s: &SurfaceHit, light: Vec3) -> Option<bool
     }
     let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
     Some(!lk.suspects.iter().any(|&t| t != EMPTY && r.tracer.hits_triangle(t, &ray).is_some()))
+}
+
+/// Whether the ray from `origin` in direction `dir` meets triangle `id` (one with a cut-out) in
+/// a hole: a map texel's centre, for maps that resolve holes texel by texel. Its barycentrics
+/// by Möller and Trumbore's ratios, whose vectors depend on the triangle and the origin alone
+/// (`u = d . (e2 x s) / d . (e2 x e1)`, `v = d . (s x e1) / d . (e2 x e1)`, `s = origin - a`):
+/// three dot products a texel, where a watertight ray test costs several times that. Not the
+/// tracer's bit for bit, which a texel's sample does not need (its footprint's borders go to
+/// rays, which are exact).
+pub(crate) fn sees_hole(scene: &crate::scene::Scene, origin: Vec3, id: u32, dir: Vec3) -> bool {
+    let Some(&[a, b, c]) = scene.positions.get(id as usize) else { return false };
+    let (e1, e2, s) = (b - a, c - a, origin - a);
+    let den = e2.cross(e1).dot(dir);
+    if den == 0.0 || !den.is_finite() {
+        return false;
+    }
+    let (u, v) = (e2.cross(s).dot(dir) / den, s.cross(e1).dot(dir) / den);
+    !scene.solid_at(id, [1.0 - u - v, u, v])
 }
 
 /// The classifier of `map`, with the renderer's bias.

@@ -21,9 +21,10 @@
 //!
 //! Every visibility path applies it: the tracer through [`CutoutTest`] (closest hits and
 //! occlusion alike), the rasterized G-buffer by casting the pixel's ray where its triangle
-//! has a hole, light maps by leaving every point that a cut-out texel would shadow to a
-//! ray (`hyrt_shadowmap::classify::Classifier::cutouts`), and VPL maps by holding, where a
-//! texel's centre sees a hole, what lies behind it (`hyrt_shadowmap::vpl_map::Holes`).
+//! has a hole, and light and VPL maps by holding, where a texel's centre sees a hole, what
+//! lies behind it (`hyrt_shadowmap::map::Holes`; with `--cutout-maps rays` light maps hold
+//! cut-outs solid and every point one would shadow goes to a ray,
+//! `hyrt_shadowmap::classify::Classifier::cutouts`).
 
 use glam::Vec2;
 

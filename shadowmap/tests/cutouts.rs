@@ -10,19 +10,27 @@ use hyrt_shadowmap::{
     map::EMPTY,
 };
 
+/// A square at height `h` of half-size `s` around the y axis.
+fn square(h: f32, s: f32) -> [Vec3; 4] {
+    [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)]
+}
+
+/// Its two triangles.
+fn quad(c: [Vec3; 4]) -> [[Vec3; 3]; 2] {
+    [[c[0], c[2], c[1]], [c[0], c[3], c[2]]]
+}
+
+/// A floor of half-size `half` at y = 0 (ids 0, 1) and a lid of half-size 0.5 at y = 1 (ids 2,
+/// 3), for lights at y = 2.
+fn floor_and_lid(half: f32) -> Vec<[Vec3; 3]> {
+    [quad(square(0.0, half)), quad(square(1.0, 0.5))].concat()
+}
+
 #[test]
 fn points_under_a_cut_out_are_borders_for_a_ray() {
     let light = Vec3::new(0.0, 2.0, 0.0);
     // A floor (ids 0, 1) and a lid half-way to the light over its middle (ids 2, 3).
-    let q =
-        |h: f32, s: f32| [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)];
-    let (floor, lid) = (q(0.0, 2.0), q(1.0, 0.5));
-    let tris = vec![
-        [floor[0], floor[2], floor[1]],
-        [floor[0], floor[3], floor[2]],
-        [lid[0], lid[2], lid[1]],
-        [lid[0], lid[3], lid[2]],
-    ];
+    let tris = floor_and_lid(2.0);
     let planes = triangle_planes(&tris);
     let opts = MapOptions { kind: MapKind::Cube, resolution: 256, ..MapOptions::default() };
     let map = LightMap::build(&tris, light, &opts, &[true; 6]);
@@ -60,15 +68,7 @@ fn points_under_a_cut_out_are_borders_for_a_ray() {
 fn vpl_map_texels_see_through_holes() {
     use hyrt_shadowmap::vpl_map::{Holes, VplFormat, VplMap};
     let o = Vec3::new(0.0, 2.0, 0.0);
-    let q =
-        |h: f32, s: f32| [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)];
-    let (floor, lid) = (q(0.0, 3.0), q(1.0, 0.5));
-    let tris = vec![
-        [floor[0], floor[2], floor[1]],
-        [floor[0], floor[3], floor[2]],
-        [lid[0], lid[2], lid[1]],
-        [lid[0], lid[3], lid[2]],
-    ];
+    let tris = floor_and_lid(3.0);
     let planes = triangle_planes(&tris);
     let opts = MapOptions { kind: MapKind::Cube, resolution: 64, ..MapOptions::default() };
     let cutouts = [false, false, true, true];
@@ -110,11 +110,7 @@ fn vpl_map_texels_see_through_holes() {
 fn paged_texels_see_through_holes_unless_another_cut_out_is_along_the_ray() {
     use hyrt_shadowmap::{ABSENT, PageKey, map::Holes};
     let light = Vec3::new(0.0, 2.0, 0.0);
-    let q =
-        |h: f32, s: f32| [Vec3::new(-s, h, -s), Vec3::new(s, h, -s), Vec3::new(s, h, s), Vec3::new(-s, h, s)];
-    let quad = |c: [Vec3; 4]| [[c[0], c[2], c[1]], [c[0], c[3], c[2]]];
-    let mut tris: Vec<[Vec3; 3]> = quad(q(0.0, 3.0)).to_vec();
-    tris.extend(quad(q(1.0, 0.5)));
+    let mut tris = floor_and_lid(3.0);
     let opts = MapOptions { kind: MapKind::Cube, ..MapOptions::default() };
     let face = LightMap::face_of(MapKind::Cube, Vec3::NEG_Y);
     let pages = [PageKey { level: 0, face, px: 0, py: 0 }];
@@ -142,7 +138,7 @@ fn paged_texels_see_through_holes_unless_another_cut_out_is_along_the_ray() {
     assert!(through > 20 && kept > 20, "{through} through, {kept} kept");
     // A second cut-out under the first: behind a hole of the first lies the second, which the
     // map without cut-outs would not show.
-    tris.extend(quad(q(0.5, 1.0)));
+    tris.extend(quad(square(0.5, 1.0)));
     let cut = LightMap::build_pages_with_holes(&tris, light, &opts, &pages, &[], Some(&holes));
     let (mut absent, mut lid) = (0, 0);
     for y in 0..32 {

@@ -73,6 +73,13 @@ pub(crate) struct ZBuffer<'a> {
     pub win: Vec<u32>,
     /// The tile's triangles, in input order.
     pub tris: Vec<&'a SetupTri>,
+    /// With `track` ([`crate::RasterOptions::contested`]): per entry, whether a fragment met
+    /// another (not the empty entry) within the tie window (equal depths without one), as
+    /// [`wins`]'s tie rule then decided; cleared as the tile is resolved. A `Cell` so that the
+    /// tie paths, which read the z-buffer through a shared reference, can mark it.
+    pub tied: Vec<std::cell::Cell<bool>>,
+    /// Whether to mark `tied`.
+    pub track: bool,
     /// The relative tie window, `> 0` (used by the kernels instantiated with `TIE = true` only).
     pub tie: f32,
     /// Whether every entry of `depth` (all equal to `empty`) and `win` is empty, as the vector
@@ -137,6 +144,13 @@ pub(crate) fn wins<const REVERSED: bool, const TIE: bool>(
     }
 }
 
+/// Whether [`wins`] decides depths `d` and `cur` by the tie rule: within the window with
+/// `TIE`, equal without.
+#[inline(always)]
+pub(crate) fn is_tie<const TIE: bool>(d: f32, cur: f32, tie: f32) -> bool {
+    if TIE { in_tie_window(d, cur, tie) } else { d == cur }
+}
+
 /// `|d - cur| <= tie * max(|d|, |cur|)`: whether two depths are a tie for the window `tie`.
 ///
 /// For reversed-Z depths `n / w` this is `|w - w'| <= tie * max(w, w')`, the relative distance
@@ -160,13 +174,17 @@ impl<'a> ZBuffer<'a> {
         &mut self,
         rect: [u32; 4],
         empty_depth: f32,
-        tie: f32,
+        (tie, track): (f32, bool),
         tris: impl Iterator<Item = &'a SetupTri>,
     ) {
         self.rect = rect;
         self.tie = tie;
         self.w = (rect[2] - rect[0]) as usize;
         let len = self.w * (rect[3] - rect[1] + 1) as usize + PAD;
+        self.track = track;
+        if track && self.tied.len() < len {
+            self.tied.resize(len, std::cell::Cell::new(false));
+        }
         if !(self.clean && self.depth.len() >= len && self.empty == empty_depth.to_bits()) {
             self.depth.clear();
             self.depth.resize(len, empty_depth);
@@ -202,8 +220,8 @@ impl<'a> ZBuffer<'a> {
         let [tx0, ty0, ..] = self.rect;
         let ef = EdgeFns::new(tri);
         let (sx1, sx2) = (ef.sx[1], ef.sx[2]);
-        let (w, tie) = (self.w, self.tie);
-        let (depth, win, tris) = (&mut self.depth, &mut self.win, &self.tris);
+        let (w, tie, track) = (self.w, self.tie, self.track);
+        let (depth, win, tris, tied) = (&mut self.depth, &mut self.win, &self.tris, &self.tied);
         let rect = clip_to_tile(self.rect, tri.bbox);
         cover_rect(
             &ef,
@@ -217,6 +235,9 @@ impl<'a> ZBuffer<'a> {
                 for j in 0..n {
                     if mask >> j & 1 != 0 {
                         let d = tri.depth([0, e1, e2]);
+                        if track && win[j] != NONE && is_tie::<TIE>(d, depth[j], tie) {
+                            tied[k + j].set(true);
+                        }
                         if wins::<REVERSED, TIE>(d, tri, depth[j], win[j], tris, tie) {
                             depth[j] = d;
                             win[j] = idx;
@@ -322,6 +343,7 @@ fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [[f32; 2]])
 pub(crate) struct Outputs {
     pub depth: bool,
     pub bary: bool,
+    pub contested: bool,
 }
 
 /// Renders the binned triangles into `target` (its buffers reused) with the given kernel and
@@ -343,7 +365,7 @@ pub(crate) fn render(
     let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
     target.width = grid.width;
     target.height = grid.height;
-    let Target { depth, id, bary: bary_buf, .. } = target;
+    let Target { depth, id, bary: bary_buf, contested, .. } = target;
     // The tile that owns a pixel writes it (every one, once), so the buffers need no clearing
     // first: a fill of 16 bytes per pixel would be a measurable part of the frame. A buffer
     // reused at the same size keeps its old values until overwritten; a new one comes zeroed
@@ -352,6 +374,12 @@ pub(crate) fn render(
     fit(depth, depth_len, 0.0);
     fit(id, len, 0);
     fit(bary_buf, bary_len, [0.0; 2]);
+    fit(contested, if out.contested { len } else { 0 }, false);
+    let contested_tiles: Vec<Option<Rows<bool>>> = if out.contested {
+        grid.split(&mut contested[..]).into_iter().map(Some).collect()
+    } else {
+        (0..grid.count()).map(|_| None).collect()
+    };
     let depth_tiles: Vec<Option<Rows<f32>>> = if out.depth {
         grid.split(&mut depth[..]).into_iter().map(Some).collect()
     } else {
@@ -370,19 +398,24 @@ pub(crate) fn render(
         let (depth, id, bary) =
             (depth_tiles.into_iter().next(), id_tiles.into_iter().next(), bary_tiles.into_iter().next());
         let mut zb = ZBuffer::from_store(std::mem::take(store));
-        let buffers = (depth.flatten(), id.expect("one tile"), bary.flatten());
+        let contested = contested_tiles.into_iter().next().flatten();
+        let buffers = (depth.flatten(), id.expect("one tile"), bary.flatten(), contested);
         draw_tile(binned, how, &mut zb, &mut Vec::new(), 0, buffers);
         *store = zb.into_store();
         return;
     }
-    depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).enumerate().for_each_init(
+    depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).zip(contested_tiles).enumerate().for_each_init(
         || (ZBuffer::default(), Vec::new()),
-        |(zb, scratch), (t, ((depth, id), bary))| draw_tile(binned, how, zb, scratch, t, (depth, id, bary)),
+        |(zb, scratch), (t, (((depth, id), bary), contested))| {
+            draw_tile(binned, how, zb, scratch, t, (depth, id, bary, contested))
+        },
     );
 }
 
-/// A tile's rows of the target's buffers: depth (if kept), ids, barycentrics (if kept).
-type TileRows<'b> = (Option<Rows<'b, f32>>, Rows<'b, u32>, Option<Rows<'b, [f32; 2]>>);
+/// A tile's rows of the target's buffers: depth (if kept), ids, barycentrics (if kept),
+/// contested pixels (if kept).
+type TileRows<'b> =
+    (Option<Rows<'b, f32>>, Rows<'b, u32>, Option<Rows<'b, [f32; 2]>>, Option<Rows<'b, bool>>);
 
 /// Draws tile `t` of `binned` with z-buffer `zb` into its rows of the target's buffers.
 fn draw_tile<'c>(
@@ -391,16 +424,17 @@ fn draw_tile<'c>(
     zb: &mut ZBuffer<'c>,
     scratch: &mut Vec<f32>,
     t: usize,
-    (depth, id, bary): TileRows,
+    (depth, id, bary, contested): TileRows,
 ) {
     let grid = binned.grid;
     if binned.tile_is_empty(t) {
         depth.into_iter().flatten().for_each(|d| d.fill(empty_depth));
         id.into_iter().for_each(|i| i.fill(EMPTY_ID));
         bary.into_iter().flatten().for_each(|b| b.fill([0.0; 2]));
+        contested.into_iter().flatten().for_each(|c| c.fill(false));
         return;
     }
-    zb.reset(grid.rect(t), empty_depth, tie, binned.tile(t));
+    zb.reset(grid.rect(t), empty_depth, (tie, contested.is_some()), binned.tile(t));
     // `!(tie > 0)` includes NaN.
     match (reversed, tie > 0.0) {
         (false, false) => zb.draw_all::<false, false>(isa),
@@ -421,6 +455,15 @@ fn draw_tile<'c>(
             zb.resolve(depth, id, bary, isa)
         }
         None => zb.resolve_ids(depth, id),
+    }
+    // The tile's marks, cleared for its next use.
+    if let Some(rows) = contested {
+        let w = zb.w;
+        for (r, row) in rows.into_iter().enumerate() {
+            for (o, c) in row.iter_mut().zip(&zb.tied[r * w..(r + 1) * w]) {
+                *o = c.replace(false);
+            }
+        }
     }
 }
 
@@ -488,7 +531,7 @@ mod tests {
         t
     }
 
-    const ALL: Outputs = Outputs { depth: true, bary: true };
+    const ALL: Outputs = Outputs { depth: true, bary: true, contested: true };
 
     #[allow(clippy::too_many_arguments)]
     fn render_into(
@@ -515,6 +558,46 @@ mod tests {
             t.id.clone(),
             t.bary.iter().map(|b| b.map(f32::to_bits)).collect(),
         )
+    }
+
+    /// Every kernel marks the same contested pixels (ties decided by the tie rule), in both
+    /// depth conventions, with and without a window: the duplicates and coplanar overlaps of
+    /// [`scene`] (and, with a wide window, many more); none where no fragment met another.
+    #[test]
+    fn every_kernel_marks_the_same_contested_pixels() {
+        let (tris, ids) = scene();
+        for reversed in [false, true] {
+            let mut counts = Vec::new();
+            for tie in [0.0, 1.0 / 65536.0, 1e-2] {
+                let reference = render_with(Isa::SCALAR, &tris, &ids, reversed, tie, 64);
+                let n = reference.contested.iter().filter(|&&c| c).count();
+                assert!(n > 10, "tie {tie}: {n} contested");
+                // A contested pixel has a triangle (two met there).
+                assert!(reference.contested.iter().zip(&reference.id).all(|(&c, &id)| !c || id != EMPTY_ID));
+                for isa in Isa::for_tests("z-buffer kernels") {
+                    for tile in [8, 64] {
+                        let t = render_with(isa, &tris, &ids, reversed, tie, tile);
+                        assert!(t.contested == reference.contested, "{isa:?} tie {tie} tile {tile}");
+                    }
+                }
+                counts.push(n);
+            }
+            // A wider window calls more pairs ties.
+            assert!(counts[0] <= counts[1] && counts[1] < counts[2], "{counts:?}");
+        }
+        // Not asked: not written.
+        let mut t = Target::default();
+        render_into(
+            Isa::best(),
+            &tris,
+            &ids,
+            true,
+            1e-2,
+            64,
+            Outputs { depth: true, bary: false, contested: false },
+            &mut t,
+        );
+        assert!(t.contested.is_empty());
     }
 
     /// Two triangles far larger than the screen, intersecting along `x = 0`, behind and in front
@@ -584,7 +667,7 @@ mod tests {
                         // Without barycentrics, into the buffers of another frame (the other
                         // depth convention: every stale value differs): the same depths and ids.
                         render_into(isa, &tris, &ids, !reversed, tie, tile, ALL, &mut t);
-                        let no_bary = Outputs { depth: true, bary: false };
+                        let no_bary = Outputs { depth: true, bary: false, contested: true };
                         render_into(isa, &tris, &ids, reversed, tie, tile, no_bary, &mut t);
                         let (d, i, b) = bits(&t);
                         assert!(
@@ -602,7 +685,7 @@ mod tests {
                                 reversed,
                                 tie,
                                 tile,
-                                Outputs { depth: false, bary },
+                                Outputs { depth: false, bary, contested: false },
                                 &mut t,
                             );
                             let (d, i, b) = bits(&t);

@@ -576,6 +576,10 @@ fn tie_winners<const REVERSED: bool, const TIE: bool>(
     while t != 0 {
         let j = t.trailing_zeros() as usize;
         let k = index(j);
+        // Every lane here is a tie (`ties`); one with a fragment already there is contested.
+        if zb.track && zb.win[k] != NONE {
+            zb.tied[k].set(true);
+        }
         if wins::<REVERSED, TIE>(d[j], tri, zb.depth[k], zb.win[k], &zb.tris, zb.tie) {
             won |= 1 << j;
         }

@@ -234,22 +234,29 @@ fn cluster_culling_and_buffer_reuse_change_no_pixel() {
     let opts = hyrt_raster::RasterOptions {
         reversed_z: true,
         depth_tie: hyrt_tracer::DEPTH_TIE,
+        rivals: true,
         ..Default::default()
     };
     let all = hyrt_raster::rasterize(&clip, &ids, 640, 480, &opts);
     // The pass casts a ray exactly where the pixel's ray leaves the rasterized triangle (its
-    // point on the plane would be off the mesh); everywhere else it keeps the raster's id.
-    let mut leaves = 0;
-    for (i, (h, &t)) in g.iter().zip(&all.id).enumerate() {
+    // point on the plane would be off the mesh); where the z-buffer had a rival, it keeps the
+    // nearer of the two by the tracer's rule; everywhere else it keeps the raster's id.
+    let (mut leaves, mut rivals) = (0, 0);
+    for (i, ((h, &t), &rival)) in g.iter().zip(&all.id).zip(&all.rival).enumerate() {
         let ray = r.camera_ray(i as u32 % 640, i as u32 / 640);
         let outside = t != hyrt_raster::EMPTY_ID
             && r.tracer.hit_on_plane(t, &ray).is_some_and(|p| p.bary.iter().any(|&b| b < 0.0));
         if outside {
             leaves += 1;
+        } else if rival != hyrt_raster::EMPTY_ID {
+            rivals += 1;
+            let want = r.tracer.nearer_hit(&ray, t, rival).map_or(t, |n| n.tri);
+            assert_eq!(id(h), want, "pixel {i}: not the nearer of its triangle and its rival");
         } else {
             assert_eq!(id(h), t, "pixel {i}: culling changed the id");
         }
     }
+    assert!(rivals > 0, "the conference room has near-coincident surfaces");
     assert_eq!(st.rays.primary, leaves, "a ray for each pixel whose ray leaves its triangle, and only those");
     assert!(leaves * 1000 <= g.len() as u64, "{leaves} rays");
     assert!(r.visibility().0 == g, "the second frame differs");

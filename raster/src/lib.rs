@@ -152,12 +152,13 @@ pub struct Target {
     /// snapped vertex positions (crate docs); `[0, 0]` when empty. Empty (length 0) when
     /// rasterized with [`RasterOptions::barycentrics`] off.
     pub bary: Vec<[f32; 2]>,
-    /// Per pixel, whether two fragments there were a depth tie (within
-    /// [`RasterOptions::depth_tie`], or of equal depth without one), decided by the tie rule
-    /// rather than by depth: where the surfaces are too close for this rasterizer's depths to
-    /// order (a caller with exact arithmetic, such as a ray, may decide those pixels itself).
-    /// Empty (length 0) unless rasterized with [`RasterOptions::contested`].
-    pub contested: Vec<bool>,
+    /// Per pixel, the id of the triangle that last lost a depth tie there (within
+    /// [`RasterOptions::depth_tie`], or of equal depth without one: decided by the tie rule
+    /// rather than by depth), or [`EMPTY_ID`]: where two surfaces are too close for this
+    /// rasterizer's depths to order, the other one (a caller with exact arithmetic, such as a
+    /// ray's, may order the pair itself). Empty (length 0) unless rasterized with
+    /// [`RasterOptions::rivals`].
+    pub rival: Vec<u32>,
 }
 
 impl Target {
@@ -170,7 +171,7 @@ impl Target {
             depth: vec![EMPTY_DEPTH; len],
             id: vec![EMPTY_ID; len],
             bary: vec![[0.0; 2]; len],
-            contested: Vec::new(),
+            rival: Vec::new(),
         }
     }
 
@@ -231,8 +232,8 @@ pub struct RasterOptions {
     /// turn it off: the buffer is left empty and its 4 bytes per pixel are not written (4-5 %
     /// of that pass, measured). The depth test itself is unchanged.
     pub depth: bool,
-    /// Write [`Target::contested`] (used by [`rasterize`] only). Default `false`.
-    pub contested: bool,
+    /// Write [`Target::rival`] (used by [`rasterize`] only). Default `false`.
+    pub rivals: bool,
 }
 
 impl RasterOptions {
@@ -245,7 +246,7 @@ impl RasterOptions {
         depth_tie: 0.0,
         barycentrics: true,
         depth: true,
-        contested: false,
+        rivals: false,
     };
 }
 
@@ -434,7 +435,7 @@ impl Rasterizer {
         (self.submitted, self.used_chunks) = (submitted, binned.chunk_count());
         // `+inf` as the largest finite window: `inf * 0` would be NaN, no tie, for two zero depths.
         let tie = if opts.depth_tie > 0.0 { opts.depth_tie.min(f32::MAX) } else { 0.0 };
-        let out = zbuf::Outputs { depth: opts.depth, bary: opts.barycentrics, contested: opts.contested };
+        let out = zbuf::Outputs { depth: opts.depth, bary: opts.barycentrics, rivals: opts.rivals };
         zbuf::render(&binned, opts.reversed_z, tie, out, isa, target, &mut self.tile_store);
     }
 }

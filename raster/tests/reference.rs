@@ -102,7 +102,7 @@ fn rasterize_matches_the_fragment_reference() {
                     depth_tie,
                     barycentrics: true,
                     depth: true,
-                    contested: false,
+                    rivals: false,
                 };
                 let expected = reference(&tris, &ids, cam.width, cam.height, &opts);
                 let covered = expected.id.iter().filter(|&&id| id != EMPTY_ID).count();

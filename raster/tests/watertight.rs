@@ -15,7 +15,7 @@ const CULL: RasterOptions = RasterOptions {
     depth_tie: 0.0,
     barycentrics: true,
     depth: true,
-    contested: false,
+    rivals: false,
 };
 /// Both faces drawn (the default).
 const TWO_SIDED: RasterOptions = RasterOptions::DEFAULT;

@@ -61,6 +61,7 @@ pub fn run(
             let t = Instant::now();
             stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
                 let ids = &target.id[y as usize * w as usize..][..row.len()];
+                let rivals = &target.rival[y as usize * w as usize..][..row.len()];
                 // Each pixel's camera ray on its triangle's plane, a row at a time (SIMD);
                 // EMPTY_ID is no triangle id, so those pixels stay `None`.
                 let parallel = r.tracer.hits_on_row(&row_rays(&r.camera, y), 0, ids, row) > 0;
@@ -75,7 +76,17 @@ pub fn run(
                 // And some pixel sees a cut-out's hole (the z-buffer draws cut-outs solid): what
                 // lies behind is the ray's to find, as the reference's primary ray does.
                 let holes = !r.cutouts().is_empty();
-                for (x, (px, &id)) in row.iter_mut().zip(ids).enumerate() {
+                let rays = row_rays(&r.camera, y);
+                for (x, ((px, &id), &rival)) in row.iter_mut().zip(ids).zip(rivals).enumerate() {
+                    // Two surfaces too close for the z-buffer's depths to order
+                    // (`hyrt_tracer::DEPTH_TIE`): the pixel's ray orders the pair as the
+                    // tracer orders any two hits (no traversal).
+                    if rival != EMPTY_ID
+                        && px.is_some_and(|h| h.bary.iter().all(|&b| b >= 0.0))
+                        && let Some(h) = r.tracer.nearer_hit(&rays.ray(x as u32), id, rival)
+                    {
+                        *px = Some(h);
+                    }
                     let outside = px.is_some_and(|h| h.bary.iter().any(|&b| b < 0.0));
                     let hole = holes && px.is_some_and(|h| !r.scene.solid_at(h.tri, h.bary));
                     if outside || hole || (parallel && px.is_none() && id != EMPTY_ID) {
@@ -127,6 +138,7 @@ pub fn raster_options() -> RasterOptions {
         depth_tie: hyrt_tracer::DEPTH_TIE,
         barycentrics: false,
         depth: false,
+        rivals: true,
         ..RasterOptions::default()
     }
 }

@@ -4,8 +4,12 @@
 //! It gives closest hits and occlusion tests that are
 //! - **watertight** ([`triangle`]: Woop, Benthin and Wald 2013, with pbrt-v4's conservative
 //!   `t > 0` bound), so rays through shared edges and vertices never slip between triangles;
-//! - **deterministic**: ties (hits within [`DEPTH_TIE`]) go to a face the ray enters, then to
-//!   the smaller original triangle id, whatever order the BVH visits them in;
+//! - **nearest first, then deterministic**: of two hits, the nearer wins wherever rounding can
+//!   tell them apart: by their `f32` distances beyond those distances' error bounds
+//!   ([`TriHit::err`]), else by the same computation in `f64` beyond its own bounds
+//!   ([`plane_distance_f64`]). Only hits closer than that (coplanar duplicates, decals) are a
+//!   tie, which goes to a face the ray enters, then to the smaller original triangle id,
+//!   whatever order the BVH visits them in;
 //! - **free of self-intersection without magic epsilons**: hit points carry a rounding-error
 //!   bound and new rays start from an origin offset just past it ([`offset`]);
 //! - **counted** by kind ([`RayCounts`]), per caller, so parallel passes reduce in a fixed order.
@@ -52,27 +56,27 @@ pub use counts::{RayCounts, RayKind};
 pub use hyrt_simd::{Isa, Tier};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
 pub use orient::{PlaneSide, plane_side};
-pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle};
+pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle, plane_distance_f64};
 
-/// Relative distance within which two hits count as a depth tie, decided for the face the ray
-/// enters, then for the smaller triangle id: `2^-16`, 15 micrometres per metre.
+/// The rasterizer's relative depth window for a depth tie, `2^-16` (15 micrometres per metre),
+/// and how far past its best hit a closest-hit traversal keeps looking.
 ///
-/// Why a tolerance: coplanar duplicates (a desk top modelled twice, decals) are hit at
-/// distances that differ only by rounding, so "the nearer" is noise, a speckle that differs
-/// between ray casting and rasterization and between neighbouring pixels. Within this window
-/// a face that the ray enters (its origin is on the front side of the face's plane, decided
-/// exactly by [`plane_side`]) beats one that it leaves, and otherwise the smaller id wins, in
-/// the tracer and in the rasterized G-buffer alike (whose front faces are those the camera's
-/// rays enter). Why the facing first: where a thin bar's side face meets its bottom face, a ray
-/// entering the side and leaving through the bottom within the window must see the side, lit
-/// from outside, not the bottom seen from inside, whatever the ids. The window is 128
-/// times the f32 unit roundoff: above the few-ulp error of the watertight test's `t` and of an
-/// exactly interpolated depth, and far below any gap between surfaces meant to be distinct.
-/// Ties are decided pairwise as candidates arrive (in the BVH's fixed order), so the result
-/// is deterministic.
+/// Why the rasterized G-buffer needs a window: its depths are `f32` values of a plane through
+/// corners projected in `f32`, good to a few ulps, so two surfaces closer than that are not
+/// ordered by them. Within the window the z-buffer decides by the tie rule (a face the camera's
+/// ray enters, then the smaller id), as the tracer does for its own ties, and marks the pixel
+/// contested (`hyrt_raster::Target::contested`): the renderer casts that pixel's ray, which
+/// orders the surfaces exactly where they can be ordered at all (module docs). 128 times the
+/// f32 unit roundoff: above the rasterizer's depth error, and far below any gap between
+/// surfaces meant to be distinct, so that contested pixels are few.
+///
+/// Why the traversal looks past its best hit: a hit farther than the best by less than their
+/// error bounds may still be the nearer, or win a tie; nodes within this window (or four error
+/// bounds, if wider) are visited.
 pub const DEPTH_TIE: f32 = 1.0 / 65536.0;
 
-/// True when distances `a` and `b` are a depth tie (see [`DEPTH_TIE`]).
+/// True when distances `a` and `b` lie within [`DEPTH_TIE`] of each other (the rasterizer's
+/// window; the tracer orders such hits by their error bounds).
 #[inline]
 pub fn depth_tie(a: f32, b: f32) -> bool {
     (a - b).abs() <= DEPTH_TIE * a.max(b)
@@ -93,6 +97,26 @@ pub fn depth_tie(a: f32, b: f32) -> bool {
 /// Rays that start farther than the scene's bounds from it (a distant camera) are not covered
 /// by this bound; their misses are what the box test's rounding gives.
 const BOX_PAD: f32 = 2.0;
+
+/// Whether hit `h` on triangle `ta` comes before hit `b` on triangle `tb` along the ray from `o`
+/// in direction `dir` (the scaled frame), the closest-hit rule (module docs): by their `f32`
+/// distances where those differ by more than their error bounds; else by the same distances in
+/// `f64` where those do; else it is a tie, which `first_on_tie` decides.
+fn before(
+    o: Vec3A,
+    dir: Vec3A,
+    (ta, h): (&[Vec3A; 3], &TriHit),
+    (tb, b): (&[Vec3A; 3], &TriHit),
+    first_on_tie: impl FnOnce() -> bool,
+) -> bool {
+    if (h.t - b.t).abs() > h.err + b.err {
+        return h.t < b.t;
+    }
+    match (plane_distance_f64(o, dir, ta), plane_distance_f64(o, dir, tb)) {
+        (Some((t1, e1)), Some((t2, e2))) if (t1 - t2).abs() > e1 + e2 => t1 < t2,
+        _ => first_on_tie(),
+    }
+}
 
 /// A triangle whose BVH box is padded by [`BOX_PAD`].
 struct Padded(Triangle);
@@ -350,8 +374,8 @@ impl Tracer {
         (ObRay::new(o, d, 0.0, tmax), RayPrecomp::new(o, d))
     }
 
-    /// The nearest hit with `0 < t < ray.tmax`; hits within [`DEPTH_TIE`] of each other go to
-    /// a face the ray enters, then to the smaller triangle id.
+    /// The nearest hit with `0 < t < ray.tmax`; hits too close for rounding to order (module
+    /// docs) go to a face the ray enters, then to the smaller triangle id.
     pub fn closest_hit(&self, ray: &Ray, kind: RayKind, counts: &mut RayCounts) -> Option<Hit> {
         counts.add(kind, 1);
         // Two instances: scenes without cut-outs pay no alpha test in the traversal's loop.
@@ -373,33 +397,62 @@ impl Tracer {
             let enters = plane_side(&tris[i].map(Vec3::from), origin) == PlaneSide::Front;
             (!enters, ids[i])
         };
-        // (t, BVH slot, barycentrics) of the best hit so far.
-        let mut best: Option<(f32, usize, [f32; 3])> = None;
+        let (o, dir) = (Vec3A::from(origin), Vec3A::from(ray.dir));
+        let nearer = |i: usize, h: &TriHit, j: usize, b: &TriHit| -> bool {
+            before(o, dir, (&tris[i], h), (&tris[j], b), || key(i) < key(j))
+        };
+        // The BVH slot and hit of the best hit so far.
+        let mut best: Option<(usize, TriHit)> = None;
         bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
             let Some(h) =
                 intersect_triangle(&pre, &tris[i], r.tmax).filter(|h| !CUT || self.solid(ids[i], h.bary))
             else {
                 return f32::INFINITY;
             };
-            let better = match best {
-                None => true,
-                Some((bt, bi, _)) => {
-                    if depth_tie(h.t, bt) {
-                        key(i) < key(bi)
-                    } else {
-                        h.t < bt
-                    }
-                }
-            };
-            if better {
-                best = Some((h.t, i, h.bary));
+            if best.as_ref().is_none_or(|(j, b)| nearer(i, &h, *j, b)) {
+                best = Some((i, h));
             }
             // obvhs shrinks tmax to the value returned and stops visiting nodes beyond it.
-            // Returning the far end of the tie window keeps every node that could still hold
-            // a tied triangle that would win the tie alive.
-            best.map_or(f32::INFINITY, |(bt, _, _)| (bt * (1.0 + DEPTH_TIE)).next_up())
+            // Returning a little beyond the best hit keeps alive every node that could hold a
+            // hit too close to it for f32 to order: within `DEPTH_TIE` of it, or four times its
+            // error bound if that is wider (the other hit's bound adds to it: for hits as
+            // ill-conditioned as that, a tie may be missed, deterministically).
+            best.map_or(f32::INFINITY, |(_, b)| (b.t + (b.t * DEPTH_TIE).max(4.0 * b.err)).next_up())
         });
-        best.map(|(t, i, bary)| Hit { t: t / self.scale, tri: ids[i], bary })
+        best.map(|(i, h)| Hit { t: h.t / self.scale, tri: ids[i], bary: h.bary })
+    }
+
+    /// Of triangles `a` and `b` (original ids), the hit that [`Tracer::closest_hit`] would
+    /// prefer if they were the scene: the nearer, ordered as there (by error bounds, then in
+    /// `f64`, then the tie key), or the one the ray meets, or `None` (an unknown id counts as
+    /// missed). No traversal and not counted as a ray: for a caller that knows the two
+    /// candidates (a rasterized pixel and its [rival](hyrt_raster::Target::rival) in the
+    /// renderer).
+    pub fn nearer_hit(&self, ray: &Ray, a: u32, b: u32) -> Option<Hit> {
+        if !ray.origin.is_finite() || !ray.dir.is_finite() {
+            return None;
+        }
+        let (ob, pre) = self.scaled(ray);
+        let hit = |id: u32| {
+            let v = self.by_id.get(id as usize)?.map(Vec3A::from);
+            intersect_triangle(&pre, &v, ob.tmax).filter(|h| self.solid(id, h.bary)).map(|h| (v, h))
+        };
+        let origin = ray.origin * self.scale;
+        let key = |v: &[Vec3A; 3], id: u32| (plane_side(&v.map(Vec3::from), origin) != PlaneSide::Front, id);
+        let (o, dir) = (Vec3A::from(origin), Vec3A::from(ray.dir));
+        let best = match (hit(a), hit(b)) {
+            (Some((va, ha)), Some((vb, hb))) => {
+                if before(o, dir, (&va, &ha), (&vb, &hb), || key(&va, a) < key(&vb, b)) {
+                    (a, ha)
+                } else {
+                    (b, hb)
+                }
+            }
+            (Some((_, ha)), None) => (a, ha),
+            (None, Some((_, hb))) => (b, hb),
+            (None, None) => return None,
+        };
+        Some(Hit { t: best.1.t / self.scale, tri: best.0, bary: best.1.bary })
     }
 
     /// True when anything is hit with `0 < t < ray.tmax`.

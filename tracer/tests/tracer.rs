@@ -249,19 +249,32 @@ fn plane_hit_equals_triangle_hit_inside_and_extends_outside() {
     assert!(tracer.hit_on_plane(0, &away).is_none());
 }
 
-/// Two parallel triangles: closer than the tie window, the smaller id wins whichever is
-/// nearer; farther apart than it, the nearer wins whatever its id.
+/// Two parallel triangles: the nearer wins whatever its id, down to gaps far below the f32
+/// distances' resolution (ordered in f64); coplanar ones, which nothing orders, go to the
+/// smaller id (both faces entered); and `nearer_hit` orders any two alike.
 #[test]
-fn near_ties_go_to_the_smaller_id_and_real_gaps_to_the_nearer() {
-    let quad = |z: f32| [vec3(-1.0, -1.0, z), vec3(1.0, -1.0, z), vec3(0.0, 1.0, z)];
+fn near_surfaces_go_to_the_nearer_and_coplanar_ones_to_the_smaller_id() {
+    let tri = |z: f32| [vec3(-1.0, -1.0, z), vec3(1.0, -1.0, z), vec3(0.0, 1.0, z)];
     let ray = Ray::new(vec3(0.1, 0.0, 10.0), vec3(0.0, 0.0, -1.0), f32::INFINITY);
     let mut c = RayCounts::default();
-    // Gap 1e-6 relative to the distance 10: a tie. Triangle 0 is the farther one.
-    let tracer = Tracer::build(&[quad(0.0), quad(1e-5)]);
+    for gap in [1e-2f32, 1e-5, 1e-6, 2e-7] {
+        // Triangle 0 is the farther one, then the nearer one.
+        for (tris, nearer) in [([tri(0.0), tri(gap)], 1), ([tri(gap), tri(0.0)], 0)] {
+            let tracer = Tracer::build(&tris);
+            assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut c).unwrap().tri, nearer, "gap {gap}");
+            assert_eq!(tracer.nearer_hit(&ray, 0, 1).unwrap().tri, nearer, "gap {gap}");
+            assert_eq!(tracer.nearer_hit(&ray, 1, 0).unwrap().tri, nearer, "gap {gap}");
+        }
+    }
+    // The same plane, the corners in another order: a tie, to the smaller id.
+    let t = tri(0.0);
+    let tracer = Tracer::build(&[[t[1], t[2], t[0]], t]);
     assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut c).unwrap().tri, 0);
-    // Gap 1e-3 relative: distinct surfaces, the nearer (id 1) wins.
-    let tracer = Tracer::build(&[quad(0.0), quad(1e-2)]);
-    assert_eq!(tracer.closest_hit(&ray, RayKind::Primary, &mut c).unwrap().tri, 1);
+    assert_eq!(tracer.nearer_hit(&ray, 1, 0).unwrap().tri, 0);
+    // Only one of the two hit: that one; neither (or an unknown id): none.
+    let tracer = Tracer::build(&[tri(0.0), tri(1.0).map(|p| p + vec3(5.0, 0.0, 0.0))]);
+    assert_eq!(tracer.nearer_hit(&ray, 1, 0).unwrap().tri, 0);
+    assert!(tracer.nearer_hit(&ray, 1, 7).is_none());
     assert!(hyrt_tracer::depth_tie(10.0, 10.0 + 1e-4) && !hyrt_tracer::depth_tie(10.0, 10.0 + 1e-3));
 }
 

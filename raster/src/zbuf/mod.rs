@@ -73,12 +73,12 @@ pub(crate) struct ZBuffer<'a> {
     pub win: Vec<u32>,
     /// The tile's triangles, in input order.
     pub tris: Vec<&'a SetupTri>,
-    /// With `track` ([`crate::RasterOptions::contested`]): per entry, whether a fragment met
-    /// another (not the empty entry) within the tie window (equal depths without one), as
-    /// [`wins`]'s tie rule then decided; cleared as the tile is resolved. A `Cell` so that the
-    /// tie paths, which read the z-buffer through a shared reference, can mark it.
-    pub tied: Vec<std::cell::Cell<bool>>,
-    /// Whether to mark `tied`.
+    /// With `track` ([`crate::RasterOptions::rivals`]): per entry, the id of the triangle that
+    /// last lost a depth tie there (within the tie window, or of equal depth without one: decided
+    /// by [`wins`]'s tie rule), or [`EMPTY_ID`]; reset as the tile is resolved. A `Cell` so that
+    /// the tie paths, which read the z-buffer through a shared reference, can mark it.
+    pub rival: Vec<std::cell::Cell<u32>>,
+    /// Whether to mark `rival`.
     pub track: bool,
     /// The relative tie window, `> 0` (used by the kernels instantiated with `TIE = true` only).
     pub tie: f32,
@@ -182,8 +182,8 @@ impl<'a> ZBuffer<'a> {
         self.w = (rect[2] - rect[0]) as usize;
         let len = self.w * (rect[3] - rect[1] + 1) as usize + PAD;
         self.track = track;
-        if track && self.tied.len() < len {
-            self.tied.resize(len, std::cell::Cell::new(false));
+        if track && self.rival.len() < len {
+            self.rival.resize(len, std::cell::Cell::new(EMPTY_ID));
         }
         if !(self.clean && self.depth.len() >= len && self.empty == empty_depth.to_bits()) {
             self.depth.clear();
@@ -221,7 +221,7 @@ impl<'a> ZBuffer<'a> {
         let ef = EdgeFns::new(tri);
         let (sx1, sx2) = (ef.sx[1], ef.sx[2]);
         let (w, tie, track) = (self.w, self.tie, self.track);
-        let (depth, win, tris, tied) = (&mut self.depth, &mut self.win, &self.tris, &self.tied);
+        let (depth, win, tris, rival) = (&mut self.depth, &mut self.win, &self.tris, &self.rival);
         let rect = clip_to_tile(self.rect, tri.bbox);
         cover_rect(
             &ef,
@@ -235,10 +235,11 @@ impl<'a> ZBuffer<'a> {
                 for j in 0..n {
                     if mask >> j & 1 != 0 {
                         let d = tri.depth([0, e1, e2]);
+                        let won = wins::<REVERSED, TIE>(d, tri, depth[j], win[j], tris, tie);
                         if track && win[j] != NONE && is_tie::<TIE>(d, depth[j], tie) {
-                            tied[k + j].set(true);
+                            rival[k + j].set(if won { tris[win[j] as usize].id } else { tri.id });
                         }
-                        if wins::<REVERSED, TIE>(d, tri, depth[j], win[j], tris, tie) {
+                        if won {
                             depth[j] = d;
                             win[j] = idx;
                         }
@@ -343,7 +344,7 @@ fn bary_run(tri: &SetupTri, ef: &EdgeFns, mut e: [i64; 3], out: &mut [[f32; 2]])
 pub(crate) struct Outputs {
     pub depth: bool,
     pub bary: bool,
-    pub contested: bool,
+    pub rivals: bool,
 }
 
 /// Renders the binned triangles into `target` (its buffers reused) with the given kernel and
@@ -365,7 +366,7 @@ pub(crate) fn render(
     let empty_depth = if reversed { EMPTY_DEPTH_REVERSED } else { EMPTY_DEPTH };
     target.width = grid.width;
     target.height = grid.height;
-    let Target { depth, id, bary: bary_buf, contested, .. } = target;
+    let Target { depth, id, bary: bary_buf, rival, .. } = target;
     // The tile that owns a pixel writes it (every one, once), so the buffers need no clearing
     // first: a fill of 16 bytes per pixel would be a measurable part of the frame. A buffer
     // reused at the same size keeps its old values until overwritten; a new one comes zeroed
@@ -374,9 +375,9 @@ pub(crate) fn render(
     fit(depth, depth_len, 0.0);
     fit(id, len, 0);
     fit(bary_buf, bary_len, [0.0; 2]);
-    fit(contested, if out.contested { len } else { 0 }, false);
-    let contested_tiles: Vec<Option<Rows<bool>>> = if out.contested {
-        grid.split(&mut contested[..]).into_iter().map(Some).collect()
+    fit(rival, if out.rivals { len } else { 0 }, EMPTY_ID);
+    let rival_tiles: Vec<Option<Rows<u32>>> = if out.rivals {
+        grid.split(&mut rival[..]).into_iter().map(Some).collect()
     } else {
         (0..grid.count()).map(|_| None).collect()
     };
@@ -398,24 +399,23 @@ pub(crate) fn render(
         let (depth, id, bary) =
             (depth_tiles.into_iter().next(), id_tiles.into_iter().next(), bary_tiles.into_iter().next());
         let mut zb = ZBuffer::from_store(std::mem::take(store));
-        let contested = contested_tiles.into_iter().next().flatten();
-        let buffers = (depth.flatten(), id.expect("one tile"), bary.flatten(), contested);
+        let rival = rival_tiles.into_iter().next().flatten();
+        let buffers = (depth.flatten(), id.expect("one tile"), bary.flatten(), rival);
         draw_tile(binned, how, &mut zb, &mut Vec::new(), 0, buffers);
         *store = zb.into_store();
         return;
     }
-    depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).zip(contested_tiles).enumerate().for_each_init(
+    depth_tiles.into_par_iter().zip(id_tiles).zip(bary_tiles).zip(rival_tiles).enumerate().for_each_init(
         || (ZBuffer::default(), Vec::new()),
-        |(zb, scratch), (t, (((depth, id), bary), contested))| {
-            draw_tile(binned, how, zb, scratch, t, (depth, id, bary, contested))
+        |(zb, scratch), (t, (((depth, id), bary), rival))| {
+            draw_tile(binned, how, zb, scratch, t, (depth, id, bary, rival))
         },
     );
 }
 
 /// A tile's rows of the target's buffers: depth (if kept), ids, barycentrics (if kept),
-/// contested pixels (if kept).
-type TileRows<'b> =
-    (Option<Rows<'b, f32>>, Rows<'b, u32>, Option<Rows<'b, [f32; 2]>>, Option<Rows<'b, bool>>);
+/// rivals (if kept).
+type TileRows<'b> = (Option<Rows<'b, f32>>, Rows<'b, u32>, Option<Rows<'b, [f32; 2]>>, Option<Rows<'b, u32>>);
 
 /// Draws tile `t` of `binned` with z-buffer `zb` into its rows of the target's buffers.
 fn draw_tile<'c>(
@@ -424,17 +424,17 @@ fn draw_tile<'c>(
     zb: &mut ZBuffer<'c>,
     scratch: &mut Vec<f32>,
     t: usize,
-    (depth, id, bary, contested): TileRows,
+    (depth, id, bary, rival): TileRows,
 ) {
     let grid = binned.grid;
     if binned.tile_is_empty(t) {
         depth.into_iter().flatten().for_each(|d| d.fill(empty_depth));
         id.into_iter().for_each(|i| i.fill(EMPTY_ID));
         bary.into_iter().flatten().for_each(|b| b.fill([0.0; 2]));
-        contested.into_iter().flatten().for_each(|c| c.fill(false));
+        rival.into_iter().flatten().for_each(|c| c.fill(EMPTY_ID));
         return;
     }
-    zb.reset(grid.rect(t), empty_depth, (tie, contested.is_some()), binned.tile(t));
+    zb.reset(grid.rect(t), empty_depth, (tie, rival.is_some()), binned.tile(t));
     // `!(tie > 0)` includes NaN.
     match (reversed, tie > 0.0) {
         (false, false) => zb.draw_all::<false, false>(isa),
@@ -457,11 +457,11 @@ fn draw_tile<'c>(
         None => zb.resolve_ids(depth, id),
     }
     // The tile's marks, cleared for its next use.
-    if let Some(rows) = contested {
+    if let Some(rows) = rival {
         let w = zb.w;
         for (r, row) in rows.into_iter().enumerate() {
-            for (o, c) in row.iter_mut().zip(&zb.tied[r * w..(r + 1) * w]) {
-                *o = c.replace(false);
+            for (o, c) in row.iter_mut().zip(&zb.rival[r * w..(r + 1) * w]) {
+                *o = c.replace(EMPTY_ID);
             }
         }
     }
@@ -531,7 +531,7 @@ mod tests {
         t
     }
 
-    const ALL: Outputs = Outputs { depth: true, bary: true, contested: true };
+    const ALL: Outputs = Outputs { depth: true, bary: true, rivals: true };
 
     #[allow(clippy::too_many_arguments)]
     fn render_into(
@@ -560,24 +560,31 @@ mod tests {
         )
     }
 
-    /// Every kernel marks the same contested pixels (ties decided by the tie rule), in both
-    /// depth conventions, with and without a window: the duplicates and coplanar overlaps of
-    /// [`scene`] (and, with a wide window, many more); none where no fragment met another.
+    /// Every kernel records the same rivals (the losers of ties decided by the tie rule), in
+    /// both depth conventions, with and without a window: at the duplicates and coplanar
+    /// overlaps of [`scene`] (and, with a wide window, many more); never the winner itself.
     #[test]
-    fn every_kernel_marks_the_same_contested_pixels() {
+    fn every_kernel_records_the_same_rivals() {
         let (tris, ids) = scene();
         for reversed in [false, true] {
             let mut counts = Vec::new();
             for tie in [0.0, 1.0 / 65536.0, 1e-2] {
                 let reference = render_with(Isa::SCALAR, &tris, &ids, reversed, tie, 64);
-                let n = reference.contested.iter().filter(|&&c| c).count();
-                assert!(n > 10, "tie {tie}: {n} contested");
-                // A contested pixel has a triangle (two met there).
-                assert!(reference.contested.iter().zip(&reference.id).all(|(&c, &id)| !c || id != EMPTY_ID));
+                let n = reference.rival.iter().filter(|&&r| r != EMPTY_ID).count();
+                assert!(n > 10, "tie {tie}: {n} rivals");
+                // A pixel with a rival has a winner, another triangle (the scene's ids are
+                // unique but for its duplicates, which share them).
+                assert!(
+                    reference
+                        .rival
+                        .iter()
+                        .zip(&reference.id)
+                        .all(|(&r, &id)| r == EMPTY_ID || id != EMPTY_ID)
+                );
                 for isa in Isa::for_tests("z-buffer kernels") {
                     for tile in [8, 64] {
                         let t = render_with(isa, &tris, &ids, reversed, tie, tile);
-                        assert!(t.contested == reference.contested, "{isa:?} tie {tie} tile {tile}");
+                        assert!(t.rival == reference.rival, "{isa:?} tie {tie} tile {tile}");
                     }
                 }
                 counts.push(n);
@@ -587,17 +594,9 @@ mod tests {
         }
         // Not asked: not written.
         let mut t = Target::default();
-        render_into(
-            Isa::best(),
-            &tris,
-            &ids,
-            true,
-            1e-2,
-            64,
-            Outputs { depth: true, bary: false, contested: false },
-            &mut t,
-        );
-        assert!(t.contested.is_empty());
+        let out = Outputs { depth: true, bary: false, rivals: false };
+        render_into(Isa::best(), &tris, &ids, true, 1e-2, 64, out, &mut t);
+        assert!(t.rival.is_empty());
     }
 
     /// Two triangles far larger than the screen, intersecting along `x = 0`, behind and in front
@@ -667,7 +666,7 @@ mod tests {
                         // Without barycentrics, into the buffers of another frame (the other
                         // depth convention: every stale value differs): the same depths and ids.
                         render_into(isa, &tris, &ids, !reversed, tie, tile, ALL, &mut t);
-                        let no_bary = Outputs { depth: true, bary: false, contested: true };
+                        let no_bary = Outputs { depth: true, bary: false, rivals: true };
                         render_into(isa, &tris, &ids, reversed, tie, tile, no_bary, &mut t);
                         let (d, i, b) = bits(&t);
                         assert!(
@@ -685,7 +684,7 @@ mod tests {
                                 reversed,
                                 tie,
                                 tile,
-                                Outputs { depth: false, bary, contested: false },
+                                Outputs { depth: false, bary, rivals: false },
                                 &mut t,
                             );
                             let (d, i, b) = bits(&t);

@@ -576,11 +576,13 @@ fn tie_winners<const REVERSED: bool, const TIE: bool>(
     while t != 0 {
         let j = t.trailing_zeros() as usize;
         let k = index(j);
-        // Every lane here is a tie (`ties`); one with a fragment already there is contested.
+        let wins = wins::<REVERSED, TIE>(d[j], tri, zb.depth[k], zb.win[k], &zb.tris, zb.tie);
+        // Every lane here is a tie (`ties`): against a fragment already there, its loser is
+        // the pixel's rival.
         if zb.track && zb.win[k] != NONE {
-            zb.tied[k].set(true);
+            zb.rival[k].set(if wins { zb.tris[zb.win[k] as usize].id } else { tri.id });
         }
-        if wins::<REVERSED, TIE>(d[j], tri, zb.depth[k], zb.win[k], &zb.tris, zb.tie) {
+        if wins {
             won |= 1 << j;
         }
         t &= t - 1;

@@ -77,7 +77,11 @@ pub fn run(
                 // lies behind is the ray's to find, as the reference's primary ray does.
                 let holes = !r.cutouts().is_empty();
                 let rays = row_rays(&r.camera, y);
-                let groups = r.plane_groups().0;
+                // Asked only for pixels with a rival (the groups are made on first use).
+                let same_plane = |a: u32, b: u32| {
+                    let groups = r.plane_groups().0;
+                    groups.get(a as usize) == groups.get(b as usize)
+                };
                 for (x, ((px, &id), &rival)) in row.iter_mut().zip(ids).zip(rivals).enumerate() {
                     // Two surfaces too close for the z-buffer's depths to order
                     // (`hyrt_tracer::DEPTH_TIE`): the pixel's ray orders the pair as the
@@ -86,7 +90,7 @@ pub fn run(
                     // the same tie rule (the face the camera's ray enters is the rasterizer's
                     // front face; then the smaller id).
                     if rival != EMPTY_ID
-                        && groups.get(rival as usize) != groups.get(id as usize)
+                        && !same_plane(rival, id)
                         && px.is_some_and(|h| h.bary.iter().all(|&b| b >= 0.0))
                         && let Some(h) = r.tracer.nearer_hit(&rays.ray(x as u32), id, rival)
                     {

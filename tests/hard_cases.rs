@@ -293,3 +293,50 @@ fn tiny_and_huge_scales_give_the_same_image() {
         assert!(wrong_px as usize <= bound, "scale {k}: {wrong_px} wrong pixels");
     }
 }
+
+/// A camera 1 to 1e5 times the scene's size away from a grid of 512 triangles (the view
+/// narrowed to keep the grid in frame): no pixel inside the grid's image misses it, with rays
+/// or the z-buffer, and both see the same hit on every pixel, bit for bit. (Before the shear's
+/// error bound followed the shear, `|sx z|` rather than `|z|`, every ray from 3e4 sizes away
+/// was rejected as possibly behind its origin.) From 1e6 sizes away the BVH's box padding no
+/// longer covers the box test's rounding (docs: `BOX_PAD`).
+#[test]
+fn a_camera_far_from_the_scene_sees_it_whole() {
+    for dist in [1.0f32, 1e3, 1e4, 1e5] {
+        let mut s = Scene::new("grid");
+        let m = s.add_material(Material::matte("g", Vec3::splat(0.8)));
+        let n = 16;
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y, d) = (i as f32 / n as f32 - 0.5, j as f32 / n as f32 - 0.5, 1.0 / n as f32);
+                s.push_quad(
+                    [vec3(x, y, 0.0), vec3(x + d, y, 0.0), vec3(x + d, y + d, 0.0), vec3(x, y + d, 0.0)],
+                    m,
+                );
+            }
+        }
+        // The grid (size 1) spans 0.6 of the view's height.
+        let fov = 2.0 * (0.5 / 0.6 / dist).atan().to_degrees();
+        let eye = vec3(0.013, 0.021, dist);
+        s.camera = Some(Camera { eye, forward: -Vec3::Z, up: Vec3::Y, fov_y_deg: fov, fov_x_deg: None });
+        s.lights =
+            vec![PointLight { position: vec3(0.0, 0.0, 2.0), intensity: Vec3::splat(4.0), spot: None }];
+        s.settings = settings(128, 128);
+        s.validate().unwrap();
+        let gbuffer = |o: Options| {
+            let mut o = o;
+            o.keep_buffers = true;
+            render(&s, o).gbuffer.unwrap()
+        };
+        let (rays, raster) = (gbuffer(Options::reference()), gbuffer(Options::hybrid()));
+        // The middle 60 x 60 pixels lie well inside the grid's image (its middle 77 x 77).
+        let holes = |g: &[Option<hyrt_tracer::Hit>]| {
+            (34..94)
+                .flat_map(|y| (34..94).map(move |x| (x, y)))
+                .filter(|&(x, y)| g[y * 128 + x].is_none())
+                .count()
+        };
+        assert_eq!((holes(&rays), holes(&raster)), (0, 0), "{dist} sizes away");
+        assert!(rays == raster, "{dist} sizes away: rays and raster see different hits");
+    }
+}

@@ -94,7 +94,9 @@ pub fn depth_tie(a: f32, b: f32) -> bool {
 /// visits a box) disagrees with the same ray traversed. Boxes larger by 2 units than their
 /// triangles contain every such rounding; the cost is nil (a millionth of the scene's extent).
 /// Rays that start farther than the scene's bounds from it (a distant camera) are not covered
-/// by this bound; their misses are what the box test's rounding gives.
+/// by this bound: the rounding of `node - o` grows with the origin's distance. Measured on a
+/// grid seen head-on (`tests/hard_cases.rs`): no ray misses from up to 1e5 times the scene's
+/// size away; from 1e6 the traversal loses hits that the triangle test alone finds.
 const BOX_PAD: f32 = 2.0;
 
 /// Whether hit `h` on triangle `ta` comes before hit `b` on triangle `tb` along the ray from `o`

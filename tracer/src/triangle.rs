@@ -91,10 +91,11 @@ pub fn plane_distance_f64(origin: Vec3A, dir: Vec3A, v: &[Vec3A; 3]) -> Option<(
     let sz = 1.0 / d[kz];
     let (sx, sy) = (-d[kx] * sz, -d[ky] * sz);
     let o = origin.to_array().map(f64::from);
+    // Sheared x and y, scaled z, and the unscaled z (for the error bound).
     let p = |q: Vec3A| {
         let q = q.to_array().map(f64::from);
         let (x, y, z) = (q[kx] - o[kx], q[ky] - o[ky], q[kz] - o[kz]);
-        [x + sx * z, y + sy * z, z * sz]
+        [x + sx * z, y + sy * z, z * sz, z]
     };
     let (p0, p1, p2) = (p(v[0]), p(v[1]), p(v[2]));
     let e0 = p1[0] * p2[1] - p1[1] * p2[0];
@@ -111,9 +112,11 @@ pub fn plane_distance_f64(origin: Vec3A, dir: Vec3A, v: &[Vec3A; 3]) -> Option<(
     let max_zt = p0[2].abs().max(p1[2].abs()).max(p2[2].abs());
     let max_xt = p0[0].abs().max(p1[0].abs()).max(p2[0].abs());
     let max_yt = p0[1].abs().max(p1[1].abs()).max(p2[1].abs());
+    let max_z_unscaled = p0[3].abs().max(p1[3].abs()).max(p2[3].abs());
     let delta_z = gamma64(4.0) * max_zt;
-    let delta_x = gamma64(6.0) * (max_xt + max_zt);
-    let delta_y = gamma64(6.0) * (max_yt + max_zt);
+    // As in the f32 test: the shear's error is relative to `|s z|`, not to the scaled `|z|`.
+    let delta_x = gamma64(6.0) * (max_xt + sx.abs() * max_z_unscaled);
+    let delta_y = gamma64(6.0) * (max_yt + sy.abs() * max_z_unscaled);
     let delta_e = 2.0 * (gamma64(3.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
     let err = 3.0 * (gamma64(4.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs()
@@ -203,12 +206,18 @@ fn intersect_perm<const INSIDE: bool, const KX: usize, const KY: usize, const KZ
     }
     // Conservative check that t > 0 despite rounding (pbrt-v4, section 6.8.7): bound the error
     // of the sheared coordinates, the edge values and t_scaled, and reject t within the bound.
+    //
+    // The sheared `x = x_t + sx z_t` (`z_t` unscaled) is off by at most `gamma(5) (|x| + |sx z_t|)`;
+    // pbrt bounds `|sx z_t|` by the scaled `|z|` (which needs `|sx| <= 1` only), which for a ray
+    // from far away (`|z_t|` huge, `sx` tiny) exceeds the distance itself and rejects every hit.
+    // `|sx| max |z_t|` is the bound the derivation gives before that step.
     let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
     let delta_z = gamma(3) * max_zt;
+    let max_z_unscaled = p0[2].abs().max(p1[2].abs()).max(p2[2].abs());
     let max_xt = p0[0].abs().max(p1[0].abs()).max(p2[0].abs());
     let max_yt = p0[1].abs().max(p1[1].abs()).max(p2[1].abs());
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_x = gamma(5) * (max_xt + r.sx.abs() * max_z_unscaled);
+    let delta_y = gamma(5) * (max_yt + r.sy.abs() * max_z_unscaled);
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
     let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();

@@ -543,10 +543,11 @@ mod x86 {
             // The conservative `t > 0` bound (pbrt-v4 6.8.7), term by term.
             let max_zt = max3::<L>(z0, z1, z2);
             let delta_z = L::mul(g3, max_zt);
+            let max_z_unscaled = max3::<L>(p0[2], p1[2], p2[2]);
             let max_xt = max3::<L>(p0[0], p1[0], p2[0]);
             let max_yt = max3::<L>(p0[1], p1[1], p2[1]);
-            let delta_x = L::mul(g5, L::add(max_xt, max_zt));
-            let delta_y = L::mul(g5, L::add(max_yt, max_zt));
+            let delta_x = L::mul(g5, L::add(max_xt, L::mul(L::abs(shear.0), max_z_unscaled)));
+            let delta_y = L::mul(g5, L::add(max_yt, L::mul(L::abs(shear.1), max_z_unscaled)));
             let delta_e = L::mul(
                 sh.two,
                 L::add(

@@ -6,8 +6,9 @@
 //!   centre (the rasterizer snaps vertices to 1/256 pixel and applies the top-left rule; the ray
 //!   test is exact in world space: they may disagree about centres that close to an edge), or
 //! - a **depth tie**: the pixel's camera ray hits both triangles at distances within the
-//!   tracer's tie window (`hyrt_tracer::DEPTH_TIE`), where the rule "smaller id wins" applies
-//!   and either answer is right up to rounding.
+//!   z-buffer's tie window (`hyrt_tracer::DEPTH_TIE`), where the pass orders the z-buffer's
+//!   winner and its rival as the tracer would; a third surface in the same window, which
+//!   the z-buffer does not record, may still differ.
 
 mod common;
 

@@ -231,6 +231,10 @@ fn gltf_alpha_modes() {
     assert!(s.warnings[0].contains("'leaf' has alphaMode BLEND") && s.warnings[0].contains("cut-out"));
     let s = load(gltf("", 0.1));
     assert!(s.cutout_flags().is_empty() && s.solid_at(0, left) && s.masks.is_empty());
+    // A negative cut-off is an error naming the material.
+    std::fs::write(&p, gltf(r#""alphaMode": "MASK", "alphaCutoff": -0.5,"#, 1.0)).unwrap();
+    let e = format!("{:#}", scene::load(p.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("leaf") && e.contains("alpha cut-off -0.5"), "{e}");
     // Texture coordinates: the scene's, which the mask reads as the colour texture does.
     assert_eq!(s.uvs[0], [Vec2::ZERO, Vec2::X, Vec2::ONE]);
 }

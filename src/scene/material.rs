@@ -217,6 +217,14 @@ impl Material {
         if !(self.shininess.is_finite() && self.shininess >= 0.0) {
             return Err(format!("highlight exponent {} must be finite and >= 0", self.shininess));
         }
+        if let Some(c) = &self.cutout
+            && !(c.cutoff.is_finite() && c.cutoff >= 0.0 && c.scale.is_finite() && c.scale >= 0.0)
+        {
+            return Err(format!(
+                "alpha cut-off {} and alpha factor {} must be finite and >= 0",
+                c.cutoff, c.scale
+            ));
+        }
         Ok(())
     }
 }

@@ -897,6 +897,14 @@ impl Inspector {
                         .map_or(name.clone(), |f| f.to_string_lossy().into_owned());
                     ui.label(format!("  texture {file} ({w}x{ht}): albedo {}", vec3(h.albedo)));
                 }
+                if let Some((mask, alpha, cutoff)) = &h.cutout {
+                    let mask = mask.as_deref().map_or("no mask".to_string(), |name| {
+                        std::path::Path::new(name)
+                            .file_name()
+                            .map_or(name.to_string(), |f| f.to_string_lossy().into_owned())
+                    });
+                    ui.label(format!("  cut-out ({mask}): alpha {alpha:.3}, cut-off {cutoff}"));
+                }
                 ui.label(format!("  t {:.4}  at {}", h.t, vec3(h.p)));
             }
         }

@@ -43,6 +43,9 @@ pub struct HitInfo {
     pub albedo: Vec3,
     /// The material's texture: its file and size.
     pub texture: Option<(String, (u32, u32))>,
+    /// The material's cut-out: its mask's file (none: the factor alone), the alpha there and
+    /// the cut-off.
+    pub cutout: Option<(Option<String>, f32, f32)>,
 }
 
 /// One light at the picked pixel.
@@ -97,7 +100,19 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
         let m = &scene.materials[scene.material[h.tri as usize] as usize];
         let texture =
             m.texture.and_then(|k| scene.textures.get(k as usize)).map(|t| (t.name.clone(), t.size()));
-        HitInfo { tri: h.tri, t: h.t, bary: h.bary, p: s.p, material: m.clone(), albedo: s.albedo, texture }
+        let cutout = scene.alpha_at(h.tri, h.bary).map(|(alpha, c)| {
+            (c.mask.and_then(|k| scene.masks.get(k as usize)).map(|m| m.name.clone()), alpha, c.cutoff)
+        });
+        HitInfo {
+            tri: h.tri,
+            t: h.t,
+            bary: h.bary,
+            p: s.p,
+            material: m.clone(),
+            albedo: s.albedo,
+            texture,
+            cutout,
+        }
     });
     let bufs = r.frame.shadows.as_ref();
     let by_rays = r.options.shadows == Shadows::Rays;

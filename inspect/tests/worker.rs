@@ -269,3 +269,36 @@ fn moves_render_light_frames_and_reuse_the_maps() {
     assert!(l.comparison.is_none(), "not asked for");
     assert_eq!(l.pose, lit);
 }
+
+/// A picked pixel on a cut-out names its mask, the alpha there (at least the cut-off: the
+/// camera sees only solid points) and the cut-off; a pixel elsewhere names none.
+#[test]
+fn picking_names_the_cut_out() {
+    let mut s = setup(small_hybrid());
+    s.scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/fence.toml").into();
+    let w = Worker::spawn(s, || {});
+    let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
+    w.send(Command::Render(Render {
+        generation: 1,
+        options: loaded.options,
+        pose: Pose::of(&loaded.scene),
+        full: true,
+        reference: false,
+    }));
+    let r = rendered(&w);
+    let (mut on, mut off) = (0, 0);
+    for y in 0..72 {
+        for x in 0..96 {
+            let Some(h) = pick::pick(&loaded, &r, x, y).hit else { continue };
+            match &h.cutout {
+                Some((mask, alpha, cutoff)) => {
+                    assert!(mask.as_deref().is_some_and(|m| m.ends_with("lattice.png")), "{mask:?}");
+                    assert!(alpha >= cutoff, "({x}, {y}): alpha {alpha} below {cutoff}");
+                    on += 1;
+                }
+                None => off += 1,
+            }
+        }
+    }
+    assert!(on > 100 && off > 100, "{on} on the lattice, {off} elsewhere");
+}

@@ -128,13 +128,19 @@ impl Scene {
     /// Whether the point of triangle `tri` at barycentrics `bary` is solid (module docs):
     /// always, for a triangle without a cut-out.
     pub fn solid_at(&self, tri: u32, bary: [f32; 3]) -> bool {
-        let Some(c) = self.cutout(tri) else { return true };
+        self.alpha_at(tri, bary).is_none_or(|(alpha, c)| alpha >= c.cutoff)
+    }
+
+    /// The alpha at barycentrics `bary` of triangle `tri` (its cut-out's factor times its
+    /// mask's alpha there), with the cut-out; `None` for a triangle without one.
+    pub fn alpha_at(&self, tri: u32, bary: [f32; 3]) -> Option<(f32, &Cutout)> {
+        let c = self.cutout(tri)?;
         let uv = self.uvs.get(tri as usize).copied().unwrap_or([Vec2::ZERO; 3]);
         let alpha = c
             .mask
             .and_then(|k| self.masks.get(k as usize))
             .map_or(1.0, |m| m.alpha(uv[0] * bary[0] + uv[1] * bary[1] + uv[2] * bary[2]));
-        c.scale * alpha >= c.cutoff
+        Some((c.scale * alpha, c))
     }
 
     /// Per triangle, whether it has a cut-out; empty when no triangle has (the form

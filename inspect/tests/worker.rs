@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use hyrt::render::{Indirect, Options, shadows::RAY_NONE};
 use hyrt_inspect::{
     Setup, navigate, pick,
-    worker::{Command, Comparison, Pose, Render, Rendered, Reply, Worker},
+    worker::{Command, Comparison, Loaded, Pose, Render, Rendered, Reply, Worker},
 };
 use hyrt_shadowmap::classify::Decision;
 
@@ -46,6 +46,20 @@ fn rendered(w: &Worker) -> Box<Rendered> {
         Reply::Failed(e) => panic!("failed: {e}"),
         _ => panic!("expected a frame"),
     }
+}
+
+/// The scene the worker loaded, and its first full frame (its own options and pose, no
+/// reference).
+fn first_full_frame(w: &Worker) -> (Box<Loaded>, Box<Rendered>) {
+    let Reply::Loaded(loaded) = next(w) else { panic!("expected the scene") };
+    w.send(Command::Render(Render {
+        generation: 1,
+        options: loaded.options,
+        pose: Pose::of(&loaded.scene),
+        full: true,
+        reference: false,
+    }));
+    (loaded, rendered(w))
 }
 
 /// The reference rendered after frame `generation`.
@@ -165,15 +179,7 @@ fn a_missing_scene_is_an_error_reply() {
 #[test]
 fn picking_agrees_with_the_frame_buffers() {
     let w = Worker::spawn(setup(small_hybrid()), || {});
-    let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
-    w.send(Command::Render(Render {
-        generation: 1,
-        options: loaded.options,
-        pose: Pose::of(&loaded.scene),
-        full: true,
-        reference: false,
-    }));
-    let r = rendered(&w);
+    let (loaded, r) = first_full_frame(&w);
     let g = r.frame.gbuffer.as_ref().expect("kept");
     let b = r.frame.shadows.as_ref().expect("kept");
     let (mut decided, mut rays) = (0, 0);
@@ -277,15 +283,7 @@ fn picking_names_the_cut_out() {
     let mut s = setup(small_hybrid());
     s.scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/fence.toml").into();
     let w = Worker::spawn(s, || {});
-    let Reply::Loaded(loaded) = next(&w) else { panic!("expected the scene") };
-    w.send(Command::Render(Render {
-        generation: 1,
-        options: loaded.options,
-        pose: Pose::of(&loaded.scene),
-        full: true,
-        reference: false,
-    }));
-    let r = rendered(&w);
+    let (loaded, r) = first_full_frame(&w);
     let (mut on, mut off) = (0, 0);
     for y in 0..72 {
         for x in 0..96 {

@@ -31,11 +31,13 @@ pub(crate) struct ShadePoint {
     pub p: Vec3,
     pub ns: Vec3,
     pub ng: Vec3,
+    /// The diffuse albedo there ([`SurfaceHit::albedo`]), which the gathered sum multiplies.
+    pub albedo: Vec3,
 }
 
 impl ShadePoint {
     pub fn of(s: &SurfaceHit) -> Self {
-        Self { p: s.p, ns: s.ns, ng: s.ng }
+        Self { p: s.p, ns: s.ns, ng: s.ng, albedo: s.albedo }
     }
 }
 

@@ -405,6 +405,8 @@ pub(crate) fn run(
     // and the camera distance; distance 0 where the pixel has no diffuse point).
     let mut irr = vec![Vec3::ZERO; n];
     let mut geo = vec![[0f32; 4]; n];
+    // Per pixel, the albedo of its diffuse point, which the filtered sum multiplies.
+    let mut albedo = vec![Vec3::ZERO; n];
     // The shading point of pixel `i`, if it is diffuse.
     let diffuse = |i: usize| {
         let h = gbuffer[i].as_ref()?;
@@ -420,8 +422,9 @@ pub(crate) fn run(
     let counts: Vec<(RayCounts, u64)> = irr
         .par_chunks_mut(w * band)
         .zip(geo.par_chunks_mut(w * band))
+        .zip(albedo.par_chunks_mut(w * band))
         .enumerate()
-        .map(|(b, (irr, geo))| {
+        .map(|(b, ((irr, geo), albedo))| {
             let first = b * w * band;
             let mut c = RayCounts::default();
             let mut pairs = 0u64;
@@ -430,12 +433,13 @@ pub(crate) fn run(
             let room = if v.maps.is_empty() { 0 } else { irr.len() / (k * k) + gather::LANES };
             let mut groups: Vec<(Vec<usize>, Points)> =
                 (0..k * k).map(|_| (Vec::with_capacity(room), Points::with_capacity(room))).collect();
-            for (j, (acc, geo)) in irr.iter_mut().zip(geo.iter_mut()).enumerate() {
+            for (j, ((acc, geo), albedo)) in irr.iter_mut().zip(geo.iter_mut()).zip(albedo).enumerate() {
                 let i = first + j;
                 if let Some(points) = shared {
                     let (sp, Some(h)) = (&points[i], &gbuffer[i]) else { continue };
                     if sp.ns != Vec3::ZERO {
                         *geo = [sp.ns.x, sp.ns.y, sp.ns.z, h.t];
+                        *albedo = sp.albedo;
                         let (group, pts) = &mut groups[Vpls::subset_of(i, w, k).0];
                         group.push(j);
                         pts.push(sp);
@@ -444,6 +448,7 @@ pub(crate) fn run(
                 }
                 let Some(s) = diffuse(i) else { continue };
                 *geo = [s.ns.x, s.ns.y, s.ns.z, s.t];
+                *albedo = s.albedo;
                 if !v.maps.is_empty() {
                     let (group, pts) = &mut groups[Vpls::subset_of(i, w, k).0];
                     group.push(j);
@@ -493,7 +498,7 @@ pub(crate) fn run(
         if let Some(h) = &gbuffer[i]
             && r.diffuse(h.tri)
         {
-            *o = r.pixel_albedo(i, h) * FRAC_1_PI * e;
+            *o = albedo[i] * FRAC_1_PI * e;
         }
     });
     counts.into_iter().fold((RayCounts::default(), 0), |(mut c, n), (d, m)| {
@@ -529,8 +534,7 @@ fn gather_all(
         .par_chunks_mut(w * BAND)
         .zip(points.par_chunks(w * BAND))
         .zip(gbuffer.par_chunks(w * BAND))
-        .enumerate()
-        .map(|(b, ((out, points), hits))| {
+        .map(|((out, points), hits)| {
             let mut pts = Points::with_capacity(points.len());
             pts.set(points);
             let mut sums = Sums::default();
@@ -540,8 +544,8 @@ fn gather_all(
             }
             let mut diffuse = 0u64;
             for (j, (o, (p, h))) in out.iter_mut().zip(points.iter().zip(hits)).enumerate() {
-                if let (Some(h), true) = (h, p.ns != Vec3::ZERO) {
-                    *o = r.pixel_albedo(b * w * BAND + j, h) * FRAC_1_PI * sums.get(j);
+                if let (Some(_), true) = (h, p.ns != Vec3::ZERO) {
+                    *o = p.albedo * FRAC_1_PI * sums.get(j);
                     diffuse += 1;
                 }
             }

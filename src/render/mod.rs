@@ -138,7 +138,8 @@ impl<'a> Renderer<'a> {
             Visibility::Raster => Tracer::build_in_background(&scene.positions),
             Visibility::Rays => Tracer::build(&scene.positions),
         };
-        let tracer = match crate::scene::cutout::CutoutTest::of(scene) {
+        let cutouts = scene.cutout_flags();
+        let tracer = match crate::scene::cutout::CutoutTest::of(scene, &cutouts) {
             Some(test) => tracer.with_cutouts(Box::new(test)),
             None => tracer,
         };
@@ -168,7 +169,7 @@ impl<'a> Renderer<'a> {
             bounds: scene.bounds(),
             occluders: Default::default(),
             plane_groups: Default::default(),
-            cutouts: scene.cutout_flags(),
+            cutouts,
         }
     }
 
@@ -307,19 +308,6 @@ impl<'a> Renderer<'a> {
     /// Whether triangle `tri`'s material reflects diffusely (indirect light reaches it).
     pub(crate) fn diffuse(&self, tri: u32) -> bool {
         self.scene.materials[self.scene.material[tri as usize] as usize].diffuse != Vec3::ZERO
-    }
-
-    /// The diffuse albedo at camera hit `h` of pixel `i`, as its [`SurfaceHit`] has it.
-    pub(crate) fn pixel_albedo(&self, i: usize, h: &Hit) -> Vec3 {
-        let m = &self.scene.materials[self.scene.material[h.tri as usize] as usize];
-        if m.texture.is_none() {
-            return m.diffuse;
-        }
-        let w = self.scene.settings.width.max(1) as usize;
-        let dir = self.camera_ray((i % w) as u32, (i / w) as u32).dir;
-        let tri = &self.scene.positions[h.tri as usize];
-        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
-        self.scene.albedo(h.tri, h.bary, h.t, ng.dot(-dir))
     }
 
     /// The camera ray through the centre of pixel `(x, y)`.

@@ -165,9 +165,9 @@ pub struct CutoutTest {
 }
 
 impl CutoutTest {
-    /// The test of `scene`'s cut-outs; `None` when it has none.
-    pub fn of(scene: &Scene) -> Option<Self> {
-        let flags = scene.cutout_flags();
+    /// The test of `scene`'s cut-outs, `flags` its [`Scene::cutout_flags`]; `None` when it has
+    /// none.
+    pub fn of(scene: &Scene, flags: &[bool]) -> Option<Self> {
         if flags.is_empty() {
             return None;
         }

@@ -99,51 +99,31 @@ pub fn depth_tie(a: f32, b: f32) -> bool {
 /// size away; from 1e6 the traversal loses hits that the triangle test alone finds.
 const BOX_PAD: f32 = 2.0;
 
-/// Whether hit `h` on triangle `ta` comes before hit `b` on triangle `tb` along the ray from `o`
-/// in direction `dir` (the scaled frame), the closest-hit rule (module docs): by their `f32`
-/// distances where those differ by more than their error bounds; else by the same distances in
-/// `f64` where those do; else it is a tie, which `first_on_tie` decides.
+/// Whether a hit at distance `ta.2` (error bound `ta.3`) on triangle `ta.0` (id `ta.1`) comes
+/// before one on `tb` along the ray from `o` in direction `dir` (the scaled frame), the
+/// closest-hit rule (module docs): by their `f32` distances where those differ by more than
+/// their error bounds; else [`near_tie`].
 #[inline(always)]
-fn before(
-    o: Vec3A,
-    dir: Vec3A,
-    (ta, h): (&[Vec3A; 3], &TriHit),
-    (tb, b): (&[Vec3A; 3], &TriHit),
-    first_on_tie: impl FnOnce() -> bool,
-) -> bool {
-    if (h.t - b.t).abs() > h.err + b.err {
-        return h.t < b.t;
-    }
-    match order_f64(o, dir, ta, tb) {
-        Some(first) => first,
-        None => first_on_tie(),
-    }
+fn before(o: Vec3A, dir: Vec3A, ta: (&[Vec3A; 3], u32, f32, f32), tb: (&[Vec3A; 3], u32, f32, f32)) -> bool {
+    if (ta.2 - tb.2).abs() > ta.3 + tb.3 { ta.2 < tb.2 } else { near_tie(o, dir, (ta.0, ta.1), (tb.0, tb.1)) }
 }
 
-/// Whether the hit on triangle `a` (with its id) comes before the one on `b`, two hits that
-/// `f32` cannot order (the closest-hit rule, [`before`]): by `f64` distances, else the tie key
-/// (faces the ray from `o` leaves after those it enters, then the smaller id). Out of line, as
-/// [`order_f64`].
+/// [`before`] for two hits that `f32` cannot order: by their `f64` distances
+/// ([`plane_distance_f64`]) where those differ by more than their bounds, else by the tie key
+/// (faces the ray from `o` leaves after those it enters, then the smaller id). Out of line: it
+/// runs for a few hits in millions, and inlined into the traversal's loop it cost that loop
+/// registers.
 #[cold]
 #[inline(never)]
 fn near_tie(o: Vec3A, dir: Vec3A, (ta, ida): (&[Vec3A; 3], u32), (tb, idb): (&[Vec3A; 3], u32)) -> bool {
-    order_f64(o, dir, ta, tb).unwrap_or_else(|| {
-        let key =
-            |t: &[Vec3A; 3], id: u32| (plane_side(&t.map(Vec3::from), Vec3::from(o)) != PlaneSide::Front, id);
-        key(ta, ida) < key(tb, idb)
-    })
-}
-
-/// [`before`]'s `f64` step: `Some(true)` if the ray meets the plane of `ta` before that of
-/// `tb` beyond both distances' error bounds, `Some(false)` if after, `None` if they cannot be
-/// ordered. Out of line: it runs for a few hits in millions, and inlined into the traversal's
-/// loop it cost that loop registers.
-#[cold]
-#[inline(never)]
-fn order_f64(o: Vec3A, dir: Vec3A, ta: &[Vec3A; 3], tb: &[Vec3A; 3]) -> Option<bool> {
     match (plane_distance_f64(o, dir, ta), plane_distance_f64(o, dir, tb)) {
-        (Some((t1, e1)), Some((t2, e2))) if (t1 - t2).abs() > e1 + e2 => Some(t1 < t2),
-        _ => None,
+        (Some((t1, e1)), Some((t2, e2))) if (t1 - t2).abs() > e1 + e2 => t1 < t2,
+        _ => {
+            let key = |t: &[Vec3A; 3], id: u32| {
+                (plane_side(&t.map(Vec3::from), Vec3::from(o)) != PlaneSide::Front, id)
+            };
+            key(ta, ida) < key(tb, idb)
+        }
     }
 }
 
@@ -420,8 +400,7 @@ impl Tracer {
             return None;
         }
         let (ob, pre) = self.scaled(ray);
-        let origin = ray.origin * self.scale;
-        let (o, dir) = (Vec3A::from(origin), Vec3A::from(ray.dir));
+        let (o, dir) = (Vec3A::from(ray.origin * self.scale), Vec3A::from(ray.dir));
         // (t, its error bound, BVH slot, barycentrics) of the best hit so far.
         let mut best: Option<(f32, f32, usize, [f32; 3])> = None;
         bvh.ray_traverse(ob, &mut RayHit::none(), |r, i| {
@@ -433,11 +412,7 @@ impl Tracer {
             let better = match best {
                 None => true,
                 Some((bt, berr, j, _)) => {
-                    if (h.t - bt).abs() > h.err + berr {
-                        h.t < bt
-                    } else {
-                        near_tie(o, dir, (&tris[i], ids[i]), (&tris[j], ids[j]))
-                    }
+                    before(o, dir, (&tris[i], ids[i], h.t, h.err), (&tris[j], ids[j], bt, berr))
                 }
             };
             if better {
@@ -469,16 +444,10 @@ impl Tracer {
             let v = self.by_id.get(id as usize)?.map(Vec3A::from);
             intersect_triangle(&pre, &v, ob.tmax).filter(|h| self.solid(id, h.bary)).map(|h| (v, h))
         };
-        let origin = ray.origin * self.scale;
-        let key = |v: &[Vec3A; 3], id: u32| (plane_side(&v.map(Vec3::from), origin) != PlaneSide::Front, id);
-        let (o, dir) = (Vec3A::from(origin), Vec3A::from(ray.dir));
+        let (o, dir) = (Vec3A::from(ray.origin * self.scale), Vec3A::from(ray.dir));
         let best = match (hit(a), hit(b)) {
             (Some((va, ha)), Some((vb, hb))) => {
-                if before(o, dir, (&va, &ha), (&vb, &hb), || key(&va, a) < key(&vb, b)) {
-                    (a, ha)
-                } else {
-                    (b, hb)
-                }
+                if before(o, dir, (&va, a, ha.t, ha.err), (&vb, b, hb.t, hb.err)) { (a, ha) } else { (b, hb) }
             }
             (Some((_, ha)), None) => (a, ha),
             (None, Some((_, hb))) => (b, hb),

@@ -468,6 +468,8 @@ mod tests {
         let n = L::N;
         let mut bad = Vec::new();
         let mut out = [0.0f32; 16];
+        // SAFETY: the caller provides `L`'s instruction set; the loads read `L::N <= 16`
+        // values from the 16-element `A` and `B`, the stores write into the 16-element `out`.
         unsafe {
             let (a, b) = (L::load(A.as_ptr()), L::load(B.as_ptr()));
             let mut same = |name: &str, v: L::F, f: &dyn Fn(f32, f32) -> f32| {
@@ -535,11 +537,13 @@ mod tests {
 
     #[target_feature(enable = "avx2,f16c")]
     unsafe fn check_avx2() -> Vec<String> {
+        // SAFETY: this function is compiled for AVX2, which its caller checked.
         unsafe { check::<Avx2>() }
     }
 
     #[target_feature(enable = "avx2,f16c,avx512f,avx512dq,avx512vl")]
     unsafe fn check_avx512() -> Vec<String> {
+        // SAFETY: this function is compiled for AVX-512, which its caller checked.
         unsafe {
             let mut bad = check::<Avx512>();
             bad.extend(check::<Avx512x8>().into_iter().map(|b| format!("{b} (8 lanes)")));

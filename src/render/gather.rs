@@ -320,6 +320,8 @@ mod vector {
     impl Lanes for Avx2 {
         #[inline(always)]
         unsafe fn gather_half(base: *const u16, idx: __m256i, m: __m256) -> __m256 {
+            // SAFETY: the caller provides AVX2 and F16C and indices within `base` for the
+            // lanes of `m` (the trait method's contract).
             unsafe {
                 let word = _mm256_mask_i32gather_epi32::<2>(
                     _mm256_setzero_si256(),
@@ -337,6 +339,8 @@ mod vector {
     impl Lanes for Avx512 {
         #[inline(always)]
         unsafe fn gather_half(base: *const u16, idx: __m512i, m: __mmask16) -> __m512 {
+            // SAFETY: the caller provides AVX-512 and indices within `base` for the lanes of
+            // `m` (the trait method's contract).
             unsafe {
                 let word = _mm512_mask_i32gather_epi32::<2>(_mm512_setzero_si512(), m, idx, base.cast());
                 let halves = _mm512_cvtepi32_epi16(_mm512_and_si512(word, _mm512_set1_epi32(0xffff)));
@@ -358,6 +362,8 @@ mod vector {
         n: usize,
         sums: &mut Sums,
     ) {
+        // SAFETY: this function's contract (AVX2 and F16C present, `texels` holding `len`
+        // values) is `add_vpl`'s.
         unsafe { add_vpl::<Avx2, DEPTH16>(c, texels, len, pts, n, sums) }
     }
 
@@ -374,6 +380,8 @@ mod vector {
         n: usize,
         sums: &mut Sums,
     ) {
+        // SAFETY: this function's contract (AVX-512 present, `texels` holding `len` values)
+        // is `add_vpl`'s.
         unsafe { add_vpl::<Avx512, DEPTH16>(c, texels, len, pts, n, sums) }
     }
 
@@ -397,7 +405,7 @@ mod vector {
         assert!(n.is_multiple_of(L::N) && n <= pts.len() && sums.0.iter().all(|s| s.len() >= n));
         let texels_n = c.res as usize * c.res as usize;
         assert!(if DEPTH16 { len > texels_n } else { len == 3 * texels_n });
-        // SAFETY (the whole body): the caller guarantees the instruction set; the loads and
+        // SAFETY: (the whole body) the caller guarantees the instruction set; the loads and
         // stores stay within the first `n` points (asserted above), the gathers within the map
         // (see each).
         unsafe {

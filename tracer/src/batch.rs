@@ -256,6 +256,8 @@ mod x86 {
         ids: &[u32],
         out: &mut [Option<Hit>],
     ) -> usize {
+        // SAFETY: this function's own contract (AVX2 present, the `vector` conditions hold) is
+        // `row`'s.
         unsafe { row::<Avx2>(t, rays, x0, ids, out) }
     }
 
@@ -270,6 +272,8 @@ mod x86 {
         ids: &[u32],
         out: &mut [Option<Hit>],
     ) -> usize {
+        // SAFETY: this function's own contract (AVX-512F present, the `vector` conditions
+        // hold) is `row`'s.
         unsafe { row::<Avx512>(t, rays, x0, ids, out) }
     }
 
@@ -278,6 +282,8 @@ mod x86 {
     /// with `kz = 0` and `kz1` those with `kz = 1` unless `kz0` is set.
     #[inline(always)]
     unsafe fn permute<L: Lanes, const KZ: usize>(kz0: L::M, kz1: L::M, [x, y, z]: [L::F; 3]) -> [L::F; 3] {
+        // SAFETY: lane selects only, on registers; the caller's contract provides `L`'s
+        // instruction set.
         unsafe {
             match KZ {
                 0 => [y, z, x],
@@ -298,12 +304,14 @@ mod x86 {
     /// `[v.x, v.y, v.z]` in every lane.
     #[inline(always)]
     unsafe fn splat3<L: Lanes>(v: Vec3) -> [L::F; 3] {
+        // SAFETY: register operations only; the caller provides `L`'s instruction set.
         unsafe { [L::splat(v.x), L::splat(v.y), L::splat(v.z)] }
     }
 
     /// `max(max(|a|, |b|), |c|)`, as `a.abs().max(b.abs()).max(c.abs())`.
     #[inline(always)]
     unsafe fn max3<L: Lanes>(a: L::F, b: L::F, c: L::F) -> L::F {
+        // SAFETY: register operations only; the caller provides `L`'s instruction set.
         unsafe { L::max(L::max(L::abs(a), L::abs(b)), L::abs(c)) }
     }
 
@@ -369,6 +377,9 @@ mod x86 {
         ids: &[u32],
         out: &mut [Option<Hit>],
     ) -> usize {
+        // SAFETY: the caller provides `L`'s instruction set and `hits_on_row_with`'s `vector`
+        // conditions. The id loads read `L::N` ids from a full chunk of `ids` or from a padded
+        // copy; the vertex gathers (in `chunk`) index `by_id` by ids checked `<= last` first.
         unsafe {
             // `Tracer::scaled`: the origin and range in the tracer's frame. `t / scale` equals
             // `t * (1 / scale)` exactly: both are the correctly rounded value of the same real
@@ -484,6 +495,9 @@ mod x86 {
         ids: &[u32],
         out: &mut [Option<Hit>],
     ) -> usize {
+        // SAFETY: the caller (`row`) provides `L`'s instruction set; the gathers read only the
+        // lanes of `c.valid` (ids `<= last`, within `by_id`) and `out` is written through
+        // slice indexing.
         unsafe {
             let [g2, g3, g5] = sh.gamma;
             let zero = sh.zero;
@@ -608,6 +622,7 @@ mod x86 {
         (kz0, kz1): (L::M, L::M),
         (sx, sy): (L::F, L::F),
     ) -> [L::F; 3] {
+        // SAFETY: register operations only; the caller provides `L`'s instruction set.
         unsafe {
             let q = [L::sub(v[0], o[0]), L::sub(v[1], o[1]), L::sub(v[2], o[2])];
             let [px, py, pz] = permute::<L, KZ>(kz0, kz1, q);

@@ -1122,7 +1122,9 @@ mod tests {
                             // SAFETY: `Isa::for_tests` lists the tiers this CPU runs.
                             match isa.tier() {
                                 Tier::Scalar => continue,
+                                // SAFETY: as above.
                                 Tier::Avx2 => unsafe { setup_chunk_avx2(&tris[..len], ids, &ctx, &mut out) },
+                                // SAFETY: as above.
                                 Tier::Avx512 => unsafe {
                                     setup_chunk_avx512(&tris[..len], ids, &ctx, &mut out)
                                 },

@@ -220,7 +220,9 @@ fn indirect_runs_only_when_asked() {
     assert!(a.stats.vpls > 0 && a.stats.rays.vpl_path > 0);
     // Cached: the second frame traces no paths and builds no maps, and gives the same bytes.
     assert_eq!(b.stats.rays.vpl_path, 0);
-    let built = |f: &hyrt::render::Frame| f.stats.decisions.iter().any(|d| d.what == "vpl_maps" && d.run);
+    let built = |f: &hyrt::render::Frame| {
+        f.stats.decisions.iter().any(|d| d.what == hyrt::render::Subject::VplMaps && d.run)
+    };
     assert!(built(&a) && !built(&b));
     assert!(a.film.pixels == b.film.pixels);
     let _ = Shadows::Smerts;

@@ -12,7 +12,7 @@ use common::*;
 use glam::{Vec3, vec3};
 use hyrt::{
     metrics,
-    render::{Cache, Frame, LightMaps, Options, Renderer},
+    render::{Cache, Frame, LightMaps, Options, Renderer, Subject},
     scene::{Camera, Material, PointLight, Scene, Settings},
 };
 
@@ -431,13 +431,17 @@ fn moving_camera_reuses_pages_and_a_moved_light_redraws_its_own() {
         "moved camera: first frame pages (used, drawn, held) {:?}, second {:?}; decisions {:#?}",
         first.stats.lights.iter().map(|l| (l.pages_used, l.pages_drawn, l.pages_held)).collect::<Vec<_>>(),
         second.stats.lights.iter().map(|l| (l.pages_used, l.pages_drawn, l.pages_held)).collect::<Vec<_>>(),
-        second.stats.decisions.iter().filter(|d| d.what.starts_with("light ")).collect::<Vec<_>>(),
+        second.stats.decisions.iter().filter(|d| matches!(d.what, Subject::Light(_))).collect::<Vec<_>>(),
     );
     for (l, st) in second.stats.lights.iter().enumerate() {
         assert!(st.pages_used > 0, "light {l}: {st:?}");
         assert!(st.pages_drawn < st.pages_used, "light {l}: no page reused after a small move: {st:?}");
-        let what = format!("light {l}");
-        let d = second.stats.decisions.iter().find(|d| d.what == what).expect("a decision per light");
+        let d = second
+            .stats
+            .decisions
+            .iter()
+            .find(|d| d.what == Subject::Light(l))
+            .expect("a decision per light");
         assert!(
             matches!(d.cache, Cache::Extended | Cache::Reused),
             "light {l}: the map should be extended or reused: {d:?}"
@@ -461,7 +465,9 @@ fn moving_camera_reuses_pages_and_a_moved_light_redraws_its_own() {
     assert!(nearl.pages_used > 0 && nearl.pages_drawn == nearl.pages_used, "the moved light: {nearl:?}");
     assert_eq!(far.pages_drawn, 0, "the unmoved light drew pages: {far:?}");
     assert!(far.pages_used > 0, "{far:?}");
-    let d = |what: &str| third.stats.decisions.iter().find(|d| d.what == what).expect("decision").clone();
-    assert_eq!(d("light 0").cache, Cache::Reused, "{:?}", d("light 0"));
-    assert_eq!(d("light 1").cache, Cache::Built, "{:?}", d("light 1"));
+    let d = |l: usize| {
+        third.stats.decisions.iter().find(|d| d.what == Subject::Light(l)).expect("decision").clone()
+    };
+    assert_eq!(d(0).cache, Cache::Reused, "{:?}", d(0));
+    assert_eq!(d(1).cache, Cache::Built, "{:?}", d(1));
 }

@@ -7,7 +7,7 @@ mod common;
 use common::floor_scene;
 use glam::{Vec3, vec3};
 use hyrt::{
-    render::FrameDecision,
+    render::{FrameDecision, Subject},
     render::{Indirect, Options, Pass, Renderer},
     scene::{IndirectSettings, PointLight, Scene},
 };
@@ -19,7 +19,7 @@ fn cornell(w: u32, h: u32) -> Scene {
     s
 }
 
-fn decision<'a>(d: &'a [FrameDecision], what: &str) -> &'a FrameDecision {
+fn decision(d: &[FrameDecision], what: Subject) -> &FrameDecision {
     d.iter().find(|d| d.what == what).unwrap_or_else(|| panic!("no decision about {what}: {d:?}"))
 }
 
@@ -64,7 +64,7 @@ fn vpls_only_when_asked() {
     assert!(!r.plan.runs(Pass::Indirect));
     let f = r.render(&|| {});
     assert_eq!((f.stats.vpls, f.stats.rays.vpl_path, f.stats.rays.vpl_shadow), (0, 0, 0));
-    assert!(f.stats.decisions.iter().all(|d| !d.what.starts_with("vpl")));
+    assert!(f.stats.decisions.iter().all(|d| !matches!(d.what, Subject::Vpls | Subject::VplMaps)));
 
     let mut asked = plain.clone();
     asked.indirect = Some(IndirectSettings { vpls: 6, bounces: 1, seed: 0, clamp: None });
@@ -75,8 +75,8 @@ fn vpls_only_when_asked() {
     assert!(r.plan.runs(Pass::Indirect));
     let f = r.render(&|| {});
     assert!(f.stats.vpls > 0 && f.stats.rays.vpl_path > 0);
-    assert!(decision(&f.stats.decisions, "vpls").run);
-    assert!(decision(&f.stats.decisions, "vpl_maps").run);
+    assert!(decision(&f.stats.decisions, Subject::Vpls).run);
+    assert!(decision(&f.stats.decisions, Subject::VplMaps).run);
 }
 
 /// A light that no visible surface faces (under the floor the camera looks at) gets no map and
@@ -98,9 +98,9 @@ fn lights_that_reach_no_visible_pixel_cost_nothing() {
     assert!(r.plan.skipped.iter().any(|d| d.reason.contains("light 2: zero intensity")), "{}", r.plan);
     let f = r.render(&|| {});
     let d = &f.stats.decisions;
-    assert!(decision(d, "light 0").run);
+    assert!(decision(d, Subject::Light(0)).run);
     for (l, why) in [(1, "no camera hit is in front of it"), (2, "zero intensity")] {
-        let dl = decision(d, &format!("light {l}"));
+        let dl = decision(d, Subject::Light(l));
         assert!(!dl.run && dl.reason.contains(why), "{dl:?}");
         let st = f.stats.lights[l];
         assert_eq!((st.faces_drawn, st.map_bytes, st.lit + st.shadowed + st.undecided), (0, 0, 0), "{st:?}");
@@ -122,7 +122,7 @@ fn lights_that_reach_no_visible_pixel_cost_nothing() {
     lit.lights[2].intensity = Vec3::splat(5.0);
     let f = Renderer::new(&lit, Options::hybrid()).render(&|| {});
     assert_eq!(f.stats.maps_built, 3);
-    assert!((0..3).all(|l| decision(&f.stats.decisions, &format!("light {l}")).run));
+    assert!((0..3).all(|l| decision(&f.stats.decisions, Subject::Light(l)).run));
     let f = Renderer::new(&lit, Options::reference()).render(&|| {});
     assert_eq!(f.stats.rays.shadow, 3 * floor_px);
 }
@@ -150,12 +150,12 @@ fn unchanged_scene_rebuilds_nothing() {
     assert_eq!(second.stats.maps_built, 0);
     assert_eq!(second.stats.rays.vpl_path, 0);
     let d = &second.stats.decisions;
-    for what in ["bvh", "vpls", "vpl_maps"] {
+    for what in [Subject::Bvh, Subject::Vpls, Subject::VplMaps] {
         let x = decision(d, what);
         assert!(!x.run && x.reason.contains("reused"), "{x:?}");
     }
     for l in 0..lights {
-        assert!(decision(d, &format!("light {l}")).reason.contains("not rebuilt"));
+        assert!(decision(d, Subject::Light(l as usize)).reason.contains("not rebuilt"));
     }
     assert_eq!(first.film, second.film);
 
@@ -175,7 +175,7 @@ fn unchanged_scene_rebuilds_nothing() {
     assert_eq!(r.set_options(o), ["light maps"]);
     let f = r.render(&|| {});
     assert_eq!((f.stats.maps_built, f.stats.rays.vpl_path), (lights, 0));
-    assert!(!decision(&f.stats.decisions, "vpl_maps").run);
+    assert!(!decision(&f.stats.decisions, Subject::VplMaps).run);
     assert_eq!(f.film, fresh(o));
 
     // VPL map resolution: the VPL maps only, the VPLs stay.
@@ -183,7 +183,10 @@ fn unchanged_scene_rebuilds_nothing() {
     assert_eq!(r.set_options(o), ["VPL maps"]);
     let f = r.render(&|| {});
     assert_eq!((f.stats.maps_built, f.stats.rays.vpl_path), (0, 0));
-    assert!(decision(&f.stats.decisions, "vpl_maps").run && !decision(&f.stats.decisions, "vpls").run);
+    assert!(
+        decision(&f.stats.decisions, Subject::VplMaps).run
+            && !decision(&f.stats.decisions, Subject::Vpls).run
+    );
     assert_eq!(f.film, fresh(o));
 
     // VPL count: new VPLs and maps; map kind: new light maps.

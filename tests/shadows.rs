@@ -11,7 +11,7 @@ use common::*;
 use glam::{Vec3, vec3};
 use hyrt::{
     metrics::{DisplayImage, compare},
-    render::{Borders, Cache, Frame, Options, Renderer, Shadows, Visibility, shadows::LightStats},
+    render::{Borders, Cache, Frame, Options, Renderer, Shadows, Subject, Visibility, shadows::LightStats},
     scene::{Camera, Material, PointLight, Scene, Settings},
 };
 use hyrt_shadowmap::MapKind;
@@ -329,7 +329,7 @@ fn maps_are_cached_and_only_needed_faces_drawn() {
         f.stats
             .decisions
             .iter()
-            .filter(|d| d.what.starts_with("light "))
+            .filter(|d| matches!(d.what, Subject::Light(_)))
             .map(|d| (d.run, d.built()))
             .collect()
     };
@@ -480,14 +480,15 @@ fn a_moved_light_rebuilds_exactly_its_own_map() {
     let f = r.render(&|| {});
     assert_eq!(f.stats.maps_built, 1, "one map built");
     assert!(std::sync::Arc::ptr_eq(&kept, &r.light_map(0).unwrap()), "light 0's map was rebuilt");
-    let says =
-        |what: &str, text: &str| f.stats.decisions.iter().any(|d| d.what == what && d.reason.contains(text));
-    assert!(says("light 0", "map reused"), "{:#?}", f.stats.decisions);
-    assert!(says("light 1", "map rebuilt: the light moved"), "{:#?}", f.stats.decisions);
+    let says = |what: Subject, text: &str| {
+        f.stats.decisions.iter().any(|d| d.what == what && d.reason.contains(text))
+    };
+    assert!(says(Subject::Light(0), "map reused"), "{:#?}", f.stats.decisions);
+    assert!(says(Subject::Light(1), "map rebuilt: the light moved"), "{:#?}", f.stats.decisions);
     let retraced = format!("{} traced again from the moved light(s), {} reused", vpls1.len(), vpls0.len());
-    assert!(says("vpls", &retraced), "{:#?}", f.stats.decisions);
+    assert!(says(Subject::Vpls, &retraced), "{:#?}", f.stats.decisions);
     let rebuilt = format!("{} of {} paraboloid maps", vpls1.len(), vpls0.len() + vpls1.len());
-    assert!(says("vpl_maps", &rebuilt), "{:#?}", f.stats.decisions);
+    assert!(says(Subject::VplMaps, &rebuilt), "{:#?}", f.stats.decisions);
     assert_eq!(of(&r, 0), vpls0, "light 0's VPLs are kept");
     assert_ne!(of(&r, 1), vpls1, "light 1's VPLs moved with it");
     assert_eq!(r.lights()[1], moved_light);
@@ -505,12 +506,12 @@ fn a_moved_light_rebuilds_exactly_its_own_map() {
     assert_eq!(r.set_light(1, brighter), vec!["VPLs and their maps"]);
     let f = r.render(&|| {});
     assert_eq!(f.stats.maps_built, 0, "the map depends on the position alone");
-    assert!(says_in(&f, "vpls", "generated from 32 light path(s) (a light's intensity changed)"));
+    assert!(says_in(&f, Subject::Vpls, "generated from 32 light path(s) (a light's intensity changed)"));
     fresh_scene.lights[1] = brighter;
     let fresh = Renderer::new(&fresh_scene, opts).render(&|| {});
     assert!(bits(&f) == bits(&fresh), "the brighter light's image differs from a fresh one");
 }
 
-fn says_in(f: &Frame, what: &str, text: &str) -> bool {
+fn says_in(f: &Frame, what: Subject, text: &str) -> bool {
     f.stats.decisions.iter().any(|d| d.what == what && d.reason.contains(text))
 }

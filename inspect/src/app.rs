@@ -11,7 +11,7 @@ use eframe::egui::{
 };
 use glam::Vec3 as V3;
 use hyrt::options::{Choice, Indirect, IndirectOptions, LightMaps, Options, Shadows};
-use hyrt::render::Cache;
+use hyrt::render::{Cache, Subject};
 use hyrt::render::{
     Pass,
     shadows::{RAY_HINT, RAY_TRAVERSAL},
@@ -466,10 +466,10 @@ impl Inspector {
                     if first.maps_built > 0 {
                         built.push("light maps");
                     }
-                    if first.decisions.iter().any(|d| d.run && d.what == "vpls") {
+                    if first.decisions.iter().any(|d| d.run && d.what == Subject::Vpls) {
                         built.push("VPLs");
                     }
-                    if first.decisions.iter().any(|d| d.run && d.what == "vpl_maps") {
+                    if first.decisions.iter().any(|d| d.run && d.what == Subject::VplMaps) {
                         built.push("VPL maps");
                     }
                     ui.label(format!("(first frame {}: built {})", self.ms(t), built.join(", ")));
@@ -712,19 +712,19 @@ impl Inspector {
             if !r.built_while_moving.is_empty() {
                 ui.label(RichText::new("Built by the frames drawn while moving (stats.decisions)").italics());
                 for d in &r.built_while_moving {
-                    decision_row(ui, d.run, &d.what, &self.times(&d.reason));
+                    decision_row(ui, d.run, &d.what.to_string(), &self.times(&d.reason));
                 }
             }
             if let Some(first) = &r.first_frame {
                 ui.label(RichText::new("First frame after the change (stats.decisions)").italics());
                 for d in &first.decisions {
-                    decision_row(ui, d.run, &d.what, &self.times(&d.reason));
+                    decision_row(ui, d.run, &d.what.to_string(), &self.times(&d.reason));
                 }
             }
             let this = if r.first_frame.is_some() { "The frame shown (caches warm)" } else { "This frame" };
             ui.label(RichText::new(format!("{this} (stats.decisions)")).italics());
             for d in &r.frame.stats.decisions {
-                decision_row(ui, d.run, &d.what, &self.times(&d.reason));
+                decision_row(ui, d.run, &d.what.to_string(), &self.times(&d.reason));
             }
         });
         egui::CollapsingHeader::new("Time per pass").default_open(true).show(ui, |ui| {
@@ -1641,10 +1641,10 @@ fn segment_distance(p: Pos2, a: Pos2, b: Pos2) -> f32 {
 /// reused"), from its decisions.
 pub fn reran(stats: &hyrt::render::FrameStats) -> String {
     let d = &stats.decisions;
-    let lights: Vec<_> = d.iter().filter(|d| d.what.starts_with("light ")).collect();
+    let lights: Vec<_> = d.iter().filter(|d| matches!(d.what, Subject::Light(_))).collect();
     let mut parts = Vec::new();
-    let of = |cache: Cache| -> Vec<&str> {
-        lights.iter().filter(|d| d.cache == cache).map(|d| d.what.as_str()).collect()
+    let of = |cache: Cache| -> Vec<String> {
+        lights.iter().filter(|d| d.cache == cache).map(|d| d.what.to_string()).collect()
     };
     let (built, extended) = (of(Cache::Built), of(Cache::Extended));
     if !lights.is_empty() {
@@ -1658,7 +1658,7 @@ pub fn reran(stats: &hyrt::render::FrameStats) -> String {
             parts.push(format!("light maps built ({})", built.join(", ")));
         }
     }
-    for (what, name) in [("vpls", "VPLs"), ("vpl_maps", "VPL maps")] {
+    for (what, name) in [(Subject::Vpls, "VPLs"), (Subject::VplMaps, "VPL maps")] {
         if let Some(v) = d.iter().find(|d| d.what == what) {
             parts.push(format!("{name} {}", if v.built() { "rebuilt" } else { "reused" }));
         }

@@ -24,8 +24,8 @@ use hyrt::{
     camera::CameraRays,
     film::Film,
     plan::Plan,
-    render::FrameDecision,
     render::{Frame, FrameStats, Indirect, Options, Renderer, Shadows, vpl::Vpl},
+    render::{FrameDecision, Subject},
     scene::{Camera, PointLight, Scene},
 };
 use hyrt_shadowmap::{
@@ -449,7 +449,11 @@ impl State<'_> {
         // in the timed shadow-ray pass): render again if this one built maps or VPLs, or
         // checked. Moving frames show what they cost, building included.
         let built = frame.stats.maps_built > 0
-            || frame.stats.decisions.iter().any(|d| d.run && (d.what == "vpls" || d.what == "vpl_maps"));
+            || frame
+                .stats
+                .decisions
+                .iter()
+                .any(|d| d.run && matches!(d.what, Subject::Vpls | Subject::VplMaps));
         let mut first_frame = None;
         if full && (built || options.check_visibility) {
             renderer.set_options(Options { check_visibility: false, ..options });

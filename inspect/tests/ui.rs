@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use eframe::egui::{self, Vec2};
 use egui_kittest::{Harness, kittest::Queryable};
-use hyrt::render::{Indirect, Options};
+use hyrt::render::{Indirect, Options, Subject};
 use hyrt_inspect::{Inspector, Setup, View};
 
 fn setup(scene: &str, options: Options) -> Setup {
@@ -360,8 +360,8 @@ fn dragging_a_light_handle_rebuilds_its_map_alone() {
     assert_eq!(r.pose.lights, after);
     // The frames drawn while dragging rebuilt the map; the full frame at rest reuses it and
     // shows what they built.
-    let built: Vec<_> = r.built_while_moving.iter().map(|d| d.what.as_str()).collect();
-    assert!(!built.is_empty() && built.iter().all(|w| *w == "light 0"), "{built:?}");
+    let built: Vec<_> = r.built_while_moving.iter().map(|d| d.what).collect();
+    assert!(!built.is_empty() && built.iter().all(|w| *w == Subject::Light(0)), "{built:?}");
     assert_eq!(r.frame.stats.maps_built, 0);
     assert!(h.query_all_by_label_contains("map rebuilt: the light moved").count() >= 1);
 }

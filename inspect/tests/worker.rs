@@ -270,8 +270,18 @@ fn moves_render_light_frames_and_reuse_the_maps() {
     assert_eq!(l.dropped, vec!["the light's map", "the light's VPLs and their maps"]);
     let first = l.first_frame.as_ref().expect("the moved light's frame built its map");
     assert_eq!(first.maps_built, 1);
-    assert!(first.decisions.iter().any(|d| d.what == "light 0" && d.reason.contains("the light moved")));
-    assert!(first.decisions.iter().any(|d| d.what == "light 1" && d.reason.contains("reused")));
+    assert!(
+        first
+            .decisions
+            .iter()
+            .any(|d| d.what == hyrt::render::Subject::Light(0) && d.reason.contains("the light moved"))
+    );
+    assert!(
+        first
+            .decisions
+            .iter()
+            .any(|d| d.what == hyrt::render::Subject::Light(1) && d.reason.contains("reused"))
+    );
     assert!(l.comparison.is_none(), "not asked for");
     assert_eq!(l.pose, lit);
 }

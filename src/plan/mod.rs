@@ -39,7 +39,7 @@ impl Plan {
     pub fn with_lights(scene: &Scene, lights: &[PointLight], opts: &Options) -> Self {
         let mut plan = Plan::default();
         let tris = scene.triangle_count();
-        plan.add(true, Pass::BvhBuild, format!("ray casting needs a BVH over {tris} triangles"));
+        plan.run(Pass::BvhBuild, format!("ray casting needs a BVH over {tris} triangles"));
         // Alpha cut-outs: how many triangles have holes, which every visibility path honours.
         let cut = scene.cutout_flags().iter().filter(|&&c| c).count();
         let holes = if cut > 0 { " or sees a cut-out's hole" } else { "" };
@@ -51,7 +51,7 @@ impl Plan {
                 )
             }
         };
-        plan.add(true, Pass::Visibility, vis);
+        plan.run(Pass::Visibility, vis);
 
         let count = lights.len();
         let used = scene.materials_in_use();
@@ -62,15 +62,14 @@ impl Plan {
         };
         for (l, light) in lights.iter().enumerate() {
             if light.intensity.max_element() <= 0.0 {
-                plan.add(
-                    false,
+                plan.skip(
                     Pass::MapBuild,
                     format!("light {l}: zero intensity: no map, no shadow rays, no VPLs"),
                 );
             }
         }
         if count == 0 {
-            plan.add(false, Pass::Direct, "the scene has no point lights".into());
+            plan.skip(Pass::Direct, "the scene has no point lights".into());
         } else {
             let sh = &opts.shadow;
             let kind = match sh.map.kind {
@@ -103,9 +102,8 @@ impl Plan {
             };
             match opts.shadows {
                 Shadows::Rays => {
-                    plan.add(false, Pass::MapBuild, "shadows by rays: no light maps".into());
-                    plan.add(
-                        true,
+                    plan.skip(Pass::MapBuild, "shadows by rays: no light maps".into());
+                    plan.run(
                         Pass::Direct,
                         format!(
                             "{count} point light(s), {highlights}, rays: one shadow ray per lit hit and light"
@@ -113,31 +111,25 @@ impl Plan {
                     );
                 }
                 Shadows::Maps | Shadows::Smerts => {
-                    plan.add(true, Pass::MapBuild, maps);
-                    plan.add(
-                        true,
-                        Pass::Classify,
+                    plan.run(Pass::MapBuild, maps);
+                    plan.run(Pass::Classify,
                         format!(
                             "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions",
                             sh.bias
                         ),
                     );
                     if opts.shadows == Shadows::Smerts {
-                        plan.add(
-                            true,
+                        plan.run(
                             Pass::Borders,
                             format!("{} borders, dilated by {} px", sh.borders.name(), sh.dilate),
                         );
-                        plan.add(
-                            true,
-                            Pass::ShadowRays,
+                        plan.run(Pass::ShadowRays,
                             "one shadow ray per border pixel and light, occluder hint first; those pixels shaded again".into(),
                         );
                     } else {
-                        plan.add(false, Pass::Borders, "shadows by maps alone: no borders, no rays".into());
+                        plan.skip(Pass::Borders, "shadows by maps alone: no borders, no rays".into());
                     }
-                    plan.add(
-                        false,
+                    plan.skip(
                         Pass::Direct,
                         "shaded by classify (and shadow_rays on borders), no pass of its own".into(),
                     );
@@ -147,12 +139,11 @@ impl Plan {
 
         let mirrors: Vec<_> = used.iter().copied().filter(|m| m.is_mirror()).collect();
         if mirrors.is_empty() {
-            plan.add(false, Pass::Specular, "no material in use has a mirror reflectance".into());
+            plan.skip(Pass::Specular, "no material in use has a mirror reflectance".into());
         } else if scene.settings.max_depth == 0 {
-            plan.add(false, Pass::Specular, "max_depth = 0".into());
+            plan.skip(Pass::Specular, "max_depth = 0".into());
         } else {
-            plan.add(
-                true,
+            plan.run(
                 Pass::Specular,
                 format!(
                     "mirror materials {}, up to {} bounce(s)",
@@ -163,22 +154,18 @@ impl Plan {
         }
         let io = &opts.indirect_opts;
         match opts.indirect {
-            Indirect::None => plan.add(false, Pass::Indirect, "no indirect-light settings (VPLs) requested".into()),
-            _ if count == 0 => plan.add(false, Pass::Indirect, "no point lights to place VPLs from".into()),
+            Indirect::None => plan.skip(Pass::Indirect, "no indirect-light settings (VPLs) requested".into()),
+            _ if count == 0 => plan.skip(Pass::Indirect, "no point lights to place VPLs from".into()),
             _ if io.vpl.paths == 0 || io.vpl.bounces == 0 => {
-                plan.add(false, Pass::Indirect, "0 VPL paths or bounces requested".into())
+                plan.skip(Pass::Indirect, "0 VPL paths or bounces requested".into())
             }
-            Indirect::Rays => plan.add(
-                true,
-                Pass::Indirect,
+            Indirect::Rays => plan.run(Pass::Indirect,
                 format!(
                     "{} VPL path(s), {} bounce(s), visibility by one shadow ray per hit and VPL",
                     io.vpl.paths, io.vpl.bounces
                 ),
             ),
-            Indirect::Maps => plan.add(
-                true,
-                Pass::Indirect,
+            Indirect::Maps => plan.run(Pass::Indirect,
                 format!(
                     "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map of {} per VPL (built once)",
                     io.vpl.paths,
@@ -194,9 +181,12 @@ impl Plan {
         plan
     }
 
-    fn add(&mut self, run: bool, pass: Pass, reason: String) {
-        let d = PassDecision { pass, reason };
-        if run { self.run.push(d) } else { self.skipped.push(d) }
+    fn run(&mut self, pass: Pass, reason: String) {
+        self.run.push(PassDecision { pass, reason });
+    }
+
+    fn skip(&mut self, pass: Pass, reason: String) {
+        self.skipped.push(PassDecision { pass, reason });
     }
 
     /// True when `pass` runs.

@@ -14,7 +14,7 @@ use hyrt_shadowmap::vpl_map::{Holes, VplMap};
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
-use crate::render::{Cache, FrameDecision};
+use crate::render::{Cache, FrameDecision, Run, Subject};
 
 use super::gather::{self, Points, ShadePoint, Sums, VplConsts};
 use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
@@ -125,8 +125,8 @@ impl Renderer<'_> {
         let cause = self.vpl_cache.cause.map_or(String::new(), |c| format!(" ({c})"));
         stats.decisions.push(
             FrameDecision::new(
-                "vpls",
-                fresh,
+                Subject::Vpls,
+                Run::when(fresh),
                 if let Some(m) = retraced {
                     format!(
                         "{} VPLs: {m} traced again from the moved light(s), {} reused{cause} in {:.1} ms",
@@ -223,8 +223,8 @@ impl Renderer<'_> {
         if self.options.indirect == Indirect::Maps {
             let n = self.options.indirect_opts.map.resolution;
             stats.decisions.push(FrameDecision::new(
-                "vpl_maps",
-                fresh,
+                Subject::VplMaps,
+                Run::when(fresh),
                 if fresh && built < maps.len() {
                     format!(
                         "{built} of {} paraboloid maps of {n}x{n} built{cause}, the others reused, in {:.1} ms",

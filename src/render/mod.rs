@@ -33,7 +33,7 @@ use hyrt_tracer::{Hit, Ray, RayCounts, Tracer};
 use rayon::prelude::*;
 
 pub use crate::plan::Pass;
-pub use decision::{Cache, FrameDecision, format_decisions};
+pub use decision::{Cache, FrameDecision, Run, Subject, format_decisions};
 pub use surface::SurfaceHit;
 
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
@@ -418,9 +418,9 @@ impl<'a> Renderer<'a> {
         // Last: a background build may have finished only during the frame.
         stats.decisions.insert(
             0,
-            crate::render::FrameDecision::new(
-                "bvh",
-                false,
+            FrameDecision::new(
+                Subject::Bvh,
+                Run::Skip,
                 format!(
                     "reused: built once for the scene ({:.1} ms), which is unchanged",
                     self.bvh_build_ms()

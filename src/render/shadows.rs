@@ -48,7 +48,7 @@ use super::{
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
 use crate::{
-    render::{Cache, FrameDecision},
+    render::{Cache, FrameDecision, Run, Subject},
     scene::PointLight,
 };
 
@@ -675,7 +675,7 @@ impl Renderer<'_> {
             let have = cache[l].as_ref().map(|m| m.faces_drawn().to_vec());
             let missing = have.as_ref().is_none_or(|h| want.iter().zip(h).any(|(w, h)| *w && !*h));
             let wanted = want.iter().filter(|&&w| w).count();
-            let what = format!("light {l}");
+            let what = Subject::Light(l);
             if wanted == 0 {
                 let why = if light.intensity.max_element() <= 0.0 {
                     "zero intensity"
@@ -684,7 +684,7 @@ impl Renderer<'_> {
                 };
                 decisions.push(FrameDecision::new(
                     what,
-                    false,
+                    Run::Skip,
                     format!("{why}: no map, no classification, no shadow rays for camera hits"),
                 ));
                 moved[l] = false;
@@ -734,7 +734,7 @@ impl Renderer<'_> {
                     page_counts[l] = [want.len() as u32, 0];
                     let reason =
                         format!("map reused from an earlier frame, not rebuilt: no page drawn ({in_use})");
-                    decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
+                    decisions.push(FrameDecision::new(what, Run::Run, reason).with_cache(Cache::Reused));
                     continue;
                 }
                 let was_moved = std::mem::take(&mut moved[l]);
@@ -759,7 +759,7 @@ impl Renderer<'_> {
                 };
                 // Drawn below, with the other lights' pages.
                 jobs.push(PageJob { light: l, draw, why, in_use, decision: decisions.len() });
-                decisions.push(FrameDecision::new(what, true, String::new()));
+                decisions.push(FrameDecision::new(what, Run::Run, String::new()));
                 continue;
             }
             // The light is in use either way; the reason says whether its map was rebuilt.
@@ -801,9 +801,9 @@ impl Renderer<'_> {
                     Cache::Built
                 };
                 let reason = format!("{reason} in {:.1} ms", super::ms(t));
-                decisions.push(FrameDecision::new(what, true, reason).with_cache(done));
+                decisions.push(FrameDecision::new(what, Run::Run, reason).with_cache(done));
             } else {
-                decisions.push(FrameDecision::new(what, true, reason).with_cache(Cache::Reused));
+                decisions.push(FrameDecision::new(what, Run::Run, reason).with_cache(Cache::Reused));
             }
         }
         // The lights' pages drawn concurrently: each build has serial steps (binning's sort,
@@ -845,7 +845,7 @@ impl Renderer<'_> {
             let (done, why) = job.why;
             let reason = format!("{why} ({}) in {ms:.1} ms", job.in_use);
             let d = &mut decisions[job.decision];
-            *d = FrameDecision::new(std::mem::take(&mut d.what), true, reason).with_cache(done);
+            *d = FrameDecision::new(d.what, Run::Run, reason).with_cache(done);
         }
         FrameMaps {
             maps: cache.iter().map(|m| m.clone().expect("built above")).collect(),

@@ -3,7 +3,8 @@
 use glam::Vec3;
 use hyrt::render::{
     Shadows, SurfaceHit,
-    shadows::{RAY_NONE, facing, resolution_guide},
+    light::facing,
+    shadows::{RAY_NONE, resolution_guide},
 };
 use hyrt_shadowmap::{
     EMPTY,

@@ -1,14 +1,12 @@
 //! Direct light from point lights at a surface point.
 
-use std::f32::consts::FRAC_1_PI;
-
 use glam::Vec3;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 
 use rayon::prelude::*;
 
 use super::gather::ShadePoint;
-use super::shadows::{PlaneSides, facing, light_geometry, viewer_side};
+use super::light::{PlaneSides, facing, light_geometry, reflect, viewer_side};
 use super::{Progress, Renderer, SurfaceHit, shadows::Shadowing};
 
 /// Shades every camera hit of the G-buffer with direct light, one shadow ray per light (the
@@ -83,33 +81,6 @@ pub fn shade(
         let g = facing(hit, light, tri)?;
         visible(l, light, hit, counts).then_some(g)
     })
-}
-
-/// The sum of [`shade`] over the lights for which `lit(l, light)` gives their geometry
-/// `(wi, cos, d2)` (those in front of the surface and visible); the one place where the
-/// material's reflection of point lights is evaluated, for the reference and the hybrid alike.
-pub(crate) fn reflect(
-    r: &Renderer,
-    hit: &SurfaceHit,
-    mut lit: impl FnMut(usize, &crate::scene::PointLight) -> Option<(Vec3, f32, f32)>,
-) -> Vec3 {
-    let m = &r.scene.materials[r.scene.material[hit.tri as usize] as usize];
-    if !m.is_lit() {
-        return Vec3::ZERO;
-    }
-    let highlight = m.has_highlight();
-    // Irradiance at normal incidence times cos(theta), summed; and weighted by the lobe.
-    let (mut sum, mut lobe_sum) = (Vec3::ZERO, Vec3::ZERO);
-    for (l, light) in r.lights.iter().enumerate() {
-        let Some((wi, cos, d2)) = lit(l, light) else { continue };
-        let e = light.intensity_towards(-wi) * (cos / d2);
-        sum += e;
-        if highlight {
-            lobe_sum += e * m.highlight_lobe(hit.ns, wi, hit.wo);
-        }
-    }
-    let diffuse = hit.albedo * FRAC_1_PI * sum;
-    if highlight { diffuse + hit.highlight * lobe_sum } else { diffuse }
 }
 
 /// [`shade`] at a point with no screen neighbours (a mirror hit): shadow rays, or the maps'

@@ -19,6 +19,7 @@ mod decision;
 pub mod direct;
 mod gather;
 pub mod indirect;
+pub mod light;
 mod pixel_rays;
 pub mod shadows;
 pub mod specular;

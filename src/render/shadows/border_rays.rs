@@ -1,0 +1,225 @@
+//! The shadow_rays pass: a shadow ray per undecided (pixel, light), its occluder hint first;
+//! and, for inspection, the check of every decision and the per-light buffers.
+
+use glam::Vec3;
+use hyrt_shadowmap::{EMPTY, classify::Decision};
+use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
+use rayon::prelude::*;
+
+use super::lookup::{classifiers, hint, lookup};
+use super::{LightBits, RAY_HINT, RAY_NONE, RAY_TRAVERSAL, Shadowing, bit, per_light, sum_per_light};
+use crate::render::light::{light_geometry, reflect};
+use crate::render::{Renderer, Shadows, SurfaceHit};
+
+/// Rays per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up in the same
+/// order for any thread count.
+const RAY_CHUNK: usize = 64;
+
+impl Shadowing<'_> {
+    /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
+    /// answer replaces the map's; the direct light of the pixels with such rays is computed
+    /// again into `direct`. With `check` (wrong-visibility count), also a plain shadow ray (no
+    /// hint) per (pixel, light) with a decision, not counted as a frame ray, checking every
+    /// decision: the map's, the hint's and the traversal's, counted apart. Completes
+    /// [`Shadowing::lights`], and with `Options::keep_buffers` the per-light buffers.
+    pub fn trace(
+        &mut self,
+        r: &Renderer,
+        gbuffer: &[Option<Hit>],
+        direct: &mut [Vec3],
+        check: bool,
+    ) -> RayCounts {
+        let n = gbuffer.len();
+        let nl = self.maps.len();
+        let keep = r.options.keep_buffers;
+        let cls = classifiers(&self.maps, self.planes, r);
+        let b = &mut self.bufs;
+        let stride = b.faces.stride;
+        b.by_hint.reset(n, nl);
+        // The pixels with rays, in order, and their shading points.
+        let w = r.scene.settings.width.max(1) as usize;
+        let pixels: Vec<u32> = (0..n.div_ceil(w))
+            .into_par_iter()
+            .flat_map_iter(|y| (y * w..((y + 1) * w).min(n)).filter(|&i| b.und.any(i)).map(|i| i as u32))
+            .collect();
+        let points: Vec<SurfaceHit> = pixels
+            .par_iter()
+            .map(|&i| r.shading_point(gbuffer, i as usize).expect("undecided pixels have a shading point"))
+            .collect();
+        // The rays, light by light, each light's in screen order: rays to one light from
+        // nearby points traverse the same nodes one after the other (the pixel-major order
+        // alternates lights, and a Morton order of the pixels measured slower than rows).
+        let und = &b.und;
+        let mut order: Vec<(u32, u32)> = Vec::new();
+        for l in 0..nl {
+            order.extend(
+                (0..pixels.len() as u32)
+                    .filter(|&k| und.get(pixels[k as usize] as usize, l))
+                    .map(|k| (l as u32, k)),
+            );
+        }
+        // Per chunk of rays: whether each is blocked, and whether its hint answered.
+        let answers: Vec<(Vec<(bool, bool)>, RayCounts)> = order
+            .par_chunks(RAY_CHUNK)
+            .map(|chunk| {
+                let mut c = RayCounts::default();
+                let out = chunk
+                    .iter()
+                    .map(|&(l, k)| {
+                        let (l, s) = (l as usize, &points[k as usize]);
+                        let i = pixels[k as usize];
+                        let hint = match self.hints[l].binary_search_by_key(&i, |e| e.pixel) {
+                            Ok(at) => self.hints[l][at].hint,
+                            // Undecided by the Laplacian, the dilation or no map: no lookup
+                            // was kept; the map's texels give a cheaper hint.
+                            Err(_) => hint(&cls[l], &self.resolution, l, s, r),
+                        };
+                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
+                        let (before, hits) = (c, c.shadow_hint_hits);
+                        let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
+                        r.pixel_rays.add(i as usize, &before, &c);
+                        (blocked, c.shadow_hint_hits > hits)
+                    })
+                    .collect();
+                (out, c)
+            })
+            .collect();
+        let mut total = RayCounts::default();
+        let mut und_counts = vec![[0u64; 2]; nl];
+        for (chunk, (out, c)) in order.chunks(RAY_CHUNK).zip(answers) {
+            for (&(l, k), (blocked, hinted)) in chunk.iter().zip(out) {
+                let (l, i) = (l as usize, pixels[k as usize] as usize);
+                let (byte, m) = (i * stride + l / 8, 1u8 << (l % 8));
+                und_counts[l][0] += 1;
+                und_counts[l][1] += u64::from(b.lit.bits[byte] & m != 0);
+                if blocked {
+                    b.lit.bits[byte] &= !m;
+                } else {
+                    b.lit.bits[byte] |= m;
+                }
+                if hinted {
+                    b.by_hint.bits[byte] |= m;
+                }
+            }
+            total += c;
+        }
+        // The direct light of the pixels with rays, again, with their final decisions.
+        let lit = &b.lit;
+        let colors: Vec<Vec3> = pixels
+            .par_iter()
+            .zip(&points)
+            .map(|(&i, s)| {
+                let bits = lit.pixel(i as usize);
+                reflect(r, s, |l, light| if bit(bits, l) { light_geometry(s, light) } else { None })
+            })
+            .collect();
+        for (&i, c) in pixels.iter().zip(colors) {
+            direct[i as usize] = c;
+        }
+        for (((st, m), u), a) in
+            self.lights.iter_mut().zip(&self.map_counts).zip(&und_counts).zip(&self.added)
+        {
+            // Undecided pairs: the map's border pairs (lit or shadowed by it), and those no map
+            // decided (`add_ray_pixels`).
+            st.undecided = u[0];
+            st.lit = m[0] - u[1];
+            st.shadowed = m[1] - (u[0] - u[1] - a);
+            st.by_tile = m[2];
+            st.by_suspects = m[3];
+        }
+        if check {
+            self.check(r, gbuffer);
+        } else {
+            self.bufs.wrong_bits.reset(0, nl);
+        }
+        if keep {
+            self.expand(r, gbuffer, check);
+        }
+        total
+    }
+
+    /// Checks every decision with a plain shadow ray (not counted as a frame ray): fills
+    /// `wrong_bits` and the `wrong*` counts of [`Shadowing::lights`].
+    fn check(&mut self, r: &Renderer, gbuffer: &[Option<Hit>]) {
+        let n = gbuffer.len();
+        let nl = self.maps.len();
+        let w = r.scene.settings.width.max(1) as usize;
+        let b = &mut self.bufs;
+        b.wrong_bits.reset(n, nl);
+        let stride = b.faces.stride;
+        let (faces, lit, und, by_hint) = (&b.faces, &b.lit, &b.und, &b.by_hint);
+        // Per row: per light, wrong decisions by [map, hint, traversal].
+        let rows: Vec<Vec<[u64; 3]>> = b
+            .wrong_bits
+            .bits
+            .par_chunks_mut((w * stride).max(1))
+            .enumerate()
+            .map(|(y, wrong)| {
+                let mut by = vec![[0u64; 3]; nl];
+                for x in 0..wrong.len() / stride {
+                    let i = y * w + x;
+                    if !faces.any(i) {
+                        continue;
+                    }
+                    let s = r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
+                    for (l, light) in r.lights.iter().enumerate() {
+                        if !faces.get(i, l) {
+                            continue;
+                        }
+                        let ray = spawn_ray_to(s.p, s.p_err, s.ng, light.position);
+                        let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
+                        if truth == lit.get(i, l) {
+                            wrong[x * stride + l / 8] |= 1 << (l % 8);
+                            let k = if !und.get(i, l) {
+                                0
+                            } else if by_hint.get(i, l) {
+                                1
+                            } else {
+                                2
+                            };
+                            by[l][k] += 1;
+                        }
+                    }
+                }
+                by
+            })
+            .collect();
+        for (st, by) in self.lights.iter_mut().zip(sum_per_light(rows, nl)) {
+            (st.wrong, st.wrong_hint, st.wrong_traversal) = (Some(by[0]), Some(by[1]), Some(by[2]));
+        }
+    }
+
+    /// The per-light buffers of [`ShadowBuffers`] (for inspection), from the per-pixel bits;
+    /// the hints are looked up again.
+    fn expand(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], check: bool) {
+        let n = gbuffer.len();
+        let nl = self.maps.len();
+        let cls = classifiers(&self.maps, self.planes, r);
+        let b = &self.bufs;
+        let occ = per_light(nl, n, |i, l| match (b.faces.get(i, l), b.lit.get(i, l)) {
+            (false, _) => Decision::NotNeeded,
+            (true, true) => Decision::Lit,
+            (true, false) => Decision::Shadow,
+        });
+        let flags = |bits: &LightBits| per_light(nl, n, |i, l| bits.get(i, l));
+        let smerts = r.options.shadows == Shadows::Smerts;
+        let undecided = if smerts { flags(&b.und) } else { vec![Vec::new(); nl] };
+        let map_border = flags(&b.edge);
+        let wrong = if check { flags(&b.wrong_bits) } else { Vec::new() };
+        let ray = per_light(nl, n, |i, l| match (b.und.get(i, l), b.by_hint.get(i, l)) {
+            (false, _) => RAY_NONE,
+            (true, true) => RAY_HINT,
+            (true, false) => RAY_TRAVERSAL,
+        });
+        let hint = per_light(nl, n, |i, l| {
+            if !b.faces.get(i, l) {
+                return EMPTY;
+            }
+            let s = r.shading_point(gbuffer, i).expect("pixels with decisions have a shading point");
+            lookup(&cls[l], &self.resolution, l, &s, r).hint
+        });
+        let b = &mut self.bufs;
+        (b.occ, b.undecided, b.map_border, b.wrong, b.ray, b.hint) =
+            (occ, undecided, map_border, wrong, ray, hint);
+    }
+}

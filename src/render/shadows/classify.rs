@@ -1,0 +1,279 @@
+//! The classify pass: 8x8 tile by tile, the shading points, every light's map decision, and
+//! the tile's direct light from those decisions (module docs of `shadows`).
+
+use std::time::Instant;
+
+use glam::Vec3;
+use hyrt_shadowmap::{
+    classify::{Decision, Hull, Plane},
+    paged::{LightTerms, Resolution},
+};
+use hyrt_tracer::Hit;
+use rayon::prelude::*;
+
+use super::lookup::{classifiers, settle};
+use super::map_cache::FrameMaps;
+use super::{BorderHint, LightStats, Shadowing, bit, sum_per_light};
+use crate::render::gather::ShadePoint;
+use crate::render::light::{PlaneSides, light_geometry_and_terms, on_viewer_side, reflect, seen_winding};
+use crate::render::{FrameStats, Pass, Progress, Renderer, SurfaceHit};
+
+/// One band of classify's outputs: direct light, and the face, lit and edge bits.
+type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
+
+/// What one band of rows of the classify pass found: per light, its map decisions (lit,
+/// shadowed, and how many of those per tile and by their ambiguous triangles) and its
+/// map-space borders, in pixel order.
+struct BandOut {
+    counts: Vec<[u64; 4]>,
+    hints: Vec<Vec<BorderHint>>,
+}
+
+/// Side of the square pixel tiles of the classify pass: its shading points stay in L1 while
+/// every light decides them, and neighbouring pixels look up neighbouring texels.
+const TILE: usize = 8;
+/// Half a [`TILE`]: the side of the quarters whose points the tile test decides at once when the
+/// whole tile's cannot.
+const H: usize = TILE / 2;
+// A tile's points are bits of a `u64` in the classify pass.
+const _: () = assert!(TILE * TILE <= 64);
+
+impl Renderer<'_> {
+    /// The map-build, classify and borders passes for the camera hits (module docs); the
+    /// classify pass also writes into `direct` the direct light of every camera hit, with the
+    /// map's decisions (the border rays correct the pixels they decide).
+    pub(crate) fn shadowing<'r>(
+        &'r self,
+        gbuffer: &[Option<Hit>],
+        direct: &mut [Vec3],
+        points: Option<&mut [ShadePoint]>,
+        progress: Progress,
+        stats: &mut FrameStats,
+    ) -> Shadowing<'r> {
+        let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
+        let n = w * h;
+        let lights = &self.lights;
+        let nl = lights.len();
+        let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
+
+        let t = Instant::now();
+        let FrameMaps { maps, built, decisions, page_counts } = self.light_maps(gbuffer);
+        let resolution: Vec<Resolution> = if self.paged_maps() {
+            self.maps.needed.get().map_or_else(Vec::new, |n| n.resolution.clone())
+        } else {
+            Vec::new()
+        };
+        // The level of a point for light `l` (its receiver factor `recv`): its page level for
+        // paged maps, 0 otherwise.
+        let receiver = |s: &SurfaceHit| resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
+        let level =
+            |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0, |r| r.level_from(recv, t));
+        stats.record(Pass::MapBuild, t);
+        stats.maps_built = built;
+        stats.decisions.extend(decisions);
+
+        let t = Instant::now();
+        let planes: &'r [Plane] = self.occluders().0;
+        let cls = classifiers(&maps, planes, self);
+        let (groups, shared) = self.plane_groups();
+        bufs.faces.reset(n, nl);
+        bufs.lit.reset(n, nl);
+        bufs.edge.reset(n, nl);
+        let stride = bufs.faces.stride;
+        let band = (TILE * w).max(1);
+        let bands = direct
+            .par_chunks_mut(band)
+            .zip(bufs.faces.bits.par_chunks_mut(band * stride))
+            .zip(bufs.lit.bits.par_chunks_mut(band * stride))
+            .zip(bufs.edge.bits.par_chunks_mut(band * stride));
+        let band_fn = |b: usize, (((out, faces), lit), edge): Band, mut pts: Option<&mut [ShadePoint]>| {
+            let first = b * band;
+            let rows = out.len() / w.max(1);
+            let mut counts = vec![[0u64; 4]; nl];
+            // Per light, the band's map-space borders and their occluder hints.
+            let mut hints: Vec<Vec<BorderHint>> = vec![Vec::new(); nl];
+            // Per tile: the shading points and the lights they face, then per light every
+            // point's location and decision, then the points' direct light from those
+            // decisions. (Prefetching the located points' texels before deciding them measured
+            // slower once pages were compact: the page-table walk it repeats costs more than
+            // the misses it hides.)
+            let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
+            // Per point of the tile, its receiver factor and (per light in turn) its level.
+            let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
+            let mut levels: Vec<u8> = Vec::with_capacity(TILE * TILE);
+            let mut located = Vec::with_capacity(TILE * TILE);
+            // Per point of the tile and light, `light_geometry`.
+            let mut geo: Vec<Option<(Vec3, f32, f32)>> = Vec::with_capacity(TILE * TILE * nl);
+            // Per point of the tile and light, its level's `LightTerms`.
+            let mut terms: Vec<LightTerms> = Vec::with_capacity(TILE * TILE * nl);
+            let mut sides = PlaneSides::new();
+            for x0 in (0..w).step_by(TILE) {
+                tile.clear();
+                recv.clear();
+                geo.clear();
+                terms.clear();
+                let x1 = (x0 + TILE).min(w);
+                for y in 0..rows {
+                    for j in y * w + x0..y * w + x1 {
+                        out[j] = Vec3::ZERO;
+                        let Some(s) = self.shading_point(gbuffer, first + j) else { continue };
+                        if let Some(pts) = pts.as_deref_mut()
+                            && self.diffuse(s.tri)
+                        {
+                            pts[j] = ShadePoint::of(&s);
+                        }
+                        let tri = &self.scene.positions[s.tri as usize];
+                        let sd = sides.of(s.tri, tri, lights);
+                        let bits = &mut faces[j * stride..][..stride];
+                        // `facing`, with the plane sides and the winding reused; the light's
+                        // geometry kept for the shading below.
+                        let seen = seen_winding(&s, tri);
+                        for (l, light) in lights.iter().enumerate() {
+                            let (g, t) = light_geometry_and_terms(&s, light);
+                            terms.push(t);
+                            if g.is_some() && on_viewer_side(seen, sd[l]) {
+                                bits[l / 8] |= 1 << (l % 8);
+                            }
+                            geo.push(g);
+                        }
+                        recv.push(receiver(&s));
+                        tile.push((j, s));
+                    }
+                }
+                // A tile wholly on one plane (triangles of one group): its corner points may
+                // decide a light at once (`Classifier::hull`).
+                let group = |s: &SurfaceHit| groups[s.tri as usize];
+                let one_plane =
+                    tile.len() == rows * (x1 - x0) && tile.iter().all(|(_, s)| group(s) == group(&tile[0].1));
+                let corners = one_plane.then(|| {
+                    let k = tile.len() - 1;
+                    [tile[0].1.p, tile[x1 - x0 - 1].1.p, tile[k + 1 - (x1 - x0)].1.p, tile[k].1.p]
+                });
+                // A full tile that the tile test cannot decide as a whole may have quarters it
+                // can: each quarter's corners, for the quarters on one plane (a tile's row-major
+                // points). A tile on one plane tries them too: what defeats the whole tile (an
+                // occluder's edge, a neighbouring triangle) often lies under one quarter.
+                let full = tile.len() == TILE * TILE;
+                let quarter = |q: usize, i: usize| (q / 2 * H + i / H) * TILE + q % 2 * H + i % H;
+                let quarters: [Option<[Vec3; 4]>; 4] = std::array::from_fn(|q| {
+                    let on_one = |g| (0..H * H).all(|i| group(&tile[quarter(q, i)].1) == g);
+                    (full && on_one(group(&tile[quarter(q, 0)].1)))
+                        .then(|| [0, H - 1, H * H - H, H * H - 1].map(|i| tile[quarter(q, i)].1.p))
+                });
+                for (l, c) in cls.iter().enumerate() {
+                    let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    levels.clear();
+                    levels.extend(recv.iter().enumerate().map(|(k, &f)| level(l, f, terms[k * nl + l])));
+                    // The tile test reads one level: the finest its points need (each point then
+                    // gets texels at least as fine as its own level's; where that level's pages
+                    // do not cover the tile, the test cannot tell).
+                    let hull_of = |k: &[Vec3; 4], first: usize, finest: u8| {
+                        let own = tile[first].1.tri;
+                        c.hull(k, own, shared[own as usize].then(|| group(&tile[first].1)), finest)
+                    };
+                    let decide_all = |hull: Hull,
+                                      points: &mut dyn Iterator<Item = usize>,
+                                      lit: &mut [u8],
+                                      counts: &mut [u64; 4]| {
+                        let lit_all = hull == Hull::Lit;
+                        for k in points {
+                            let j = tile[k].0;
+                            if faces[j * stride + byte] & bit != 0 {
+                                lit[j * stride + byte] |= if lit_all { bit } else { 0 };
+                                counts[usize::from(!lit_all)] += 1;
+                                counts[2] += 1;
+                            }
+                        }
+                    };
+                    let hull = corners
+                        .as_ref()
+                        .map_or(Hull::Unknown, |k| hull_of(k, 0, levels.iter().copied().max().unwrap_or(0)));
+                    if hull != Hull::Unknown {
+                        decide_all(hull, &mut (0..tile.len()), lit, &mut counts[l]);
+                        continue;
+                    }
+                    // The points no quarter's test decided, a bit per point of the tile.
+                    let mut undecided = u64::MAX;
+                    for (q, k) in quarters.iter().enumerate() {
+                        let Some(k) = k else { continue };
+                        let finest = (0..H * H).map(|i| levels[quarter(q, i)]).max().unwrap_or(0);
+                        let hull = hull_of(k, quarter(q, 0), finest);
+                        if hull != Hull::Unknown {
+                            decide_all(hull, &mut (0..H * H).map(|i| quarter(q, i)), lit, &mut counts[l]);
+                            (0..H * H).for_each(|i| undecided &= !(1u64 << quarter(q, i)));
+                        }
+                    }
+                    // Located first, then decided: two loops measured faster than one.
+                    located.clear();
+                    for (k, (j, s)) in tile.iter().enumerate() {
+                        if faces[j * stride + byte] & bit != 0 && undecided >> k & 1 != 0 {
+                            located.push((k, c.locate_at(s.p, levels[k])));
+                        }
+                    }
+                    for &(k, m) in &located {
+                        let (j, s) = &tile[k];
+                        let lk = c.classify_at(s.p, s.tri, m);
+                        let settled = settle(self, &lk, s, lights[l].position);
+                        let is_lit = settled.unwrap_or(lk.decision == Decision::Lit);
+                        if is_lit {
+                            lit[j * stride + byte] |= bit;
+                        }
+                        counts[l][usize::from(!is_lit)] += 1;
+                        counts[l][3] += u64::from(settled.is_some());
+                        if lk.map_border && settled.is_none() {
+                            edge[j * stride + byte] |= bit;
+                            hints[l].push(BorderHint { pixel: (first + j) as u32, hint: lk.hint });
+                        }
+                    }
+                }
+                for (k, (j, s)) in tile.iter().enumerate() {
+                    let lb = &lit[j * stride..][..stride];
+                    let g = &geo[k * nl..][..nl];
+                    out[*j] = reflect(self, s, |l, _| if bit(lb, l) { g[l] } else { None });
+                }
+            }
+            (0..rows).for_each(|_| progress());
+            hints.iter_mut().for_each(|h| h.sort_unstable_by_key(|e| e.pixel));
+            BandOut { counts, hints }
+        };
+        let bands: Vec<BandOut> = match points {
+            Some(p) => bands
+                .zip(p.par_chunks_mut(band))
+                .enumerate()
+                .map(|(b, (x, p))| band_fn(b, x, Some(p)))
+                .collect(),
+            None => bands.enumerate().map(|(b, x)| band_fn(b, x, None)).collect(),
+        };
+        // The bands' lists in band order: each light's in pixel order.
+        let hints =
+            (0..nl).map(|l| bands.iter().flat_map(|b| b.hints[l].iter().copied()).collect()).collect();
+        let map_counts = sum_per_light(bands.into_iter().map(|b| b.counts).collect(), nl);
+        stats.record(Pass::Classify, t);
+
+        let t = Instant::now();
+        self.borders(&mut bufs, w, h);
+        stats.record(Pass::Borders, t);
+
+        let needed = self.maps.needed.get();
+        let lights = maps
+            .iter()
+            .zip(&page_counts)
+            .enumerate()
+            .map(|(l, (m, &[used, drawn]))| LightStats {
+                faces_drawn: m.faces_drawn().iter().filter(|&&f| f).count() as u32,
+                map_bytes: m.memory_bytes() as u64,
+                pages_used: used,
+                pages_drawn: drawn,
+                pages_held: m.page_count() as u32,
+                finest_level: needed
+                    .and_then(|n| n.pages.get(l))
+                    .and_then(|p| p.iter().map(|k| k.level).max())
+                    .unwrap_or(0),
+                level_cap: resolution.get(l).map_or(hyrt_shadowmap::MAX_LEVEL, |r| r.cap),
+                ..LightStats::default()
+            })
+            .collect();
+        let added = vec![0; nl];
+        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, hints }
+    }
+}

@@ -51,7 +51,7 @@ fn main() {
                 let t = Instant::now();
                 let f = r.render(&|| {});
                 frame_ms[i].push(t.elapsed().as_secs_f64() * 1e3);
-                ind_ms[i].push(f.stats.time_ms.get("indirect").copied().unwrap_or(0.0));
+                ind_ms[i].push(f.stats.ms(hyrt::render::Pass::Indirect));
             }
         }
         let e = scene.settings.exposure;
@@ -67,7 +67,7 @@ fn main() {
                 median(&mut ind_ms[i]),
                 base / ms,
                 f.stats.rays.vpl_shadow,
-                f.stats.time_ms.get("vpl_map_build").copied().unwrap_or(0.0),
+                f.stats.ms(hyrt::render::Pass::VplMapBuild),
                 f.stats.vpl_map_bytes as f64 / 1e6,
             );
         }

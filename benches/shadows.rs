@@ -81,7 +81,7 @@ fn main() {
                 checked.check_visibility = true;
                 let c = Renderer::new(&scene, checked).render(&|| {});
                 let w: u64 = c.stats.lights.iter().map(|l| l.wrong.unwrap_or(0)).sum();
-                (w.to_string(), format!("{:.1}", f.stats.time_ms["map_build"]))
+                (w.to_string(), format!("{:.1}", f.stats.ms(hyrt::render::Pass::MapBuild)))
             };
             let psnr = if psnr.is_infinite() { "inf".to_string() } else { format!("{psnr:.2}") };
             println!(

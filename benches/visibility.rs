@@ -62,9 +62,9 @@ fn main() {
             if i > 0 {
                 t_rays.push(a);
                 t_raster.push(b);
-                t_cull.push(st.time_ms["vis_cull"]);
-                t_rz.push(st.time_ms["vis_raster"]);
-                t_rs.push(st.time_ms["vis_resolve"]);
+                t_cull.push(st.ms(hyrt::render::Pass::VisCull));
+                t_rz.push(st.ms(hyrt::render::Pass::VisRaster));
+                t_rs.push(st.ms(hyrt::render::Pass::VisResolve));
             }
         }
         let (mut f_rays, mut f_raster) = (Vec::new(), Vec::new());

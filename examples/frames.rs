@@ -55,9 +55,11 @@ fn main() {
     r.render(&|| {});
     let mut times: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     for _ in 0..frames {
-        for (k, v) in r.render(&|| {}).stats.time_ms {
-            times.entry(k).or_default().push(v);
+        let stats = r.render(&|| {}).stats;
+        for (k, v) in stats.pass_ms {
+            times.entry(k.name()).or_default().push(v);
         }
+        times.entry("total").or_default().push(stats.total_ms);
     }
     let mut rows: Vec<_> = times.into_iter().collect();
     rows.sort_by_key(|(k, _)| (Pass::rank(k), *k));

@@ -210,7 +210,7 @@ fn indirect_runs_only_when_asked() {
     assert!(off.plan.skipped.iter().any(|d| d.pass == Pass::Indirect));
     let f = off.render(&|| {});
     assert_eq!((f.stats.vpls, f.stats.rays.vpl_shadow, f.stats.rays.vpl_path), (0, 0, 0));
-    assert!(!f.stats.time_ms.contains_key("vpl_gen"));
+    assert!(!f.stats.pass_ms.contains_key(&hyrt::render::Pass::VplGen));
 
     let mut on = Options::hybrid();
     on.indirect = Indirect::Maps;

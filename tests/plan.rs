@@ -50,7 +50,7 @@ fn reflections_only_with_mirrors() {
             assert!(skipped.reason.contains(why), "{skipped:?}");
             let f = r.render(&|| {});
             assert_eq!(f.stats.rays.specular, 0);
-            assert!(!f.stats.time_ms.contains_key("specular"));
+            assert!(!f.stats.pass_ms.contains_key(&Pass::Specular));
         }
     }
 }

@@ -144,7 +144,7 @@ fn specular_rays_are_cast_only_when_a_mirror_is_seen() {
     let mut scene = floor_scene(1.0, Vec3::splat(0.5), 2.0, 30.0, lights, 16, 16);
     let r = render(&scene, Options::default());
     assert_eq!(r.stats.rays.specular, 0);
-    assert!(!r.stats.time_ms.contains_key("specular"), "no mirror: no specular pass");
+    assert!(!r.stats.pass_ms.contains_key(&hyrt::render::Pass::Specular), "no mirror: no specular pass");
 
     scene.materials[0] = Material::mirror("mirror", Vec3::ZERO, Vec3::ONE);
     let r = render(&scene, Options::default());

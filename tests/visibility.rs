@@ -186,7 +186,7 @@ fn raster_visibility_casts_few_primary_rays_and_times_its_pass() {
     scene.settings.height = 60;
     let f = render(&scene, Options { visibility: Visibility::Raster, ..Options::default() });
     assert!(f.stats.rays.primary * 100 < 80 * 60, "{:?}", f.stats.rays);
-    assert!(f.stats.time_ms.contains_key("visibility"));
+    assert!(f.stats.pass_ms.contains_key(&hyrt::render::Pass::Visibility));
     let reference = render(&scene, Options::default());
     // Same shading wherever the triangle agrees: the images are nearly identical.
     let c = hyrt::metrics::compare(

@@ -198,7 +198,9 @@ fn render(a: &RenderArgs) -> Result<()> {
 
     say(format!("this frame:\n{}", hyrt::render::format_decisions(&frame.stats.decisions).trim_end()));
     let r = &frame.stats.rays;
-    let times: Vec<String> = frame.stats.time_ms.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
+    let times: Vec<String> = (frame.stats.pass_ms.iter().map(|(k, v)| format!("{k} {v:.1}")))
+        .chain([format!("total {:.1}", frame.stats.total_ms)])
+        .collect();
     say(format!(
         "rays: primary {} shadow {} (hint hits {}) specular {} vpl_shadow {} vpl_path {} total {}\ntime ms: {}",
         r.primary,
@@ -305,7 +307,7 @@ fn vs_reference(
     for _ in 0..VS_FRAMES {
         for (o, times) in [(hybrid, &mut h), (reference, &mut r)] {
             renderer.set_options(o);
-            times.push(renderer.render(&|| {}).stats.time_ms["total"]);
+            times.push(renderer.render(&|| {}).stats.total_ms);
             bar.inc(1);
         }
     }
@@ -341,7 +343,7 @@ fn cold_first_frames(
             drop(renderer);
             if is_hybrid {
                 h.push(ms);
-                maps.push(frame.stats.time_ms.get("map_build").copied().unwrap_or(0.0));
+                maps.push(frame.stats.ms(hyrt::render::Pass::MapBuild));
             } else {
                 r.push(ms);
             }
@@ -434,11 +436,7 @@ fn plan(a: &PlanArgs) -> Result<()> {
             renderer.render(&|| {}).stats
         })
         .collect();
-    let passes = |s: &hyrt::render::FrameStats| {
-        let mut p: Vec<&str> = s.time_ms.keys().copied().filter(|k| *k != "total").collect();
-        p.sort_by_key(|n| hyrt::render::Pass::rank(n));
-        p
-    };
+    let passes = |s: &hyrt::render::FrameStats| s.pass_ms.keys().map(|p| p.name()).collect::<Vec<_>>();
     if a.json {
         let f: Vec<_> = frames
             .iter()

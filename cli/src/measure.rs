@@ -20,7 +20,7 @@ use serde::Serialize;
 pub use hyrt::metrics::{Timing, psnr, wrong_visibility};
 use hyrt::{
     film::Film,
-    render::{Frame, Options, Renderer, Shadows},
+    render::{Frame, Options, Pass, Renderer, Shadows},
     scene::Scene,
 };
 
@@ -134,14 +134,14 @@ pub fn measure(
     for c in configs {
         let (r, f, cold_ms) = cold_first_frame(c.scene.as_deref().unwrap_or(scene), c.options);
         progress(&c.label);
-        let t = |k: &str| f.stats.time_ms.get(k).copied().unwrap_or(0.0);
+        let t = |p: Pass| f.stats.ms(p);
         out.push(Measurement {
             label: c.label.clone(),
             frame_ms: Timing::default(),
             pass_ms: BTreeMap::new(),
-            first_frame_ms: t("total"),
+            first_frame_ms: f.stats.total_ms,
             cold_first_frame_ms: cold_ms,
-            map_build_ms: t("map_build") + t("vpl_map_build"),
+            map_build_ms: t(Pass::MapBuild) + t(Pass::VplMapBuild),
             bvh_build_ms: r.bvh_build_ms(),
             rays: f.stats.rays,
             map_bytes: light_map_bytes(&f) + f.stats.vpl_map_bytes,
@@ -162,11 +162,10 @@ pub fn measure(
         for (i, r) in renderers.iter().enumerate() {
             let f = r.render(&|| {});
             progress(&configs[i].label);
-            for (k, v) in &f.stats.time_ms {
-                if *k == "total" {
-                    frames[i].push(*v);
-                } else {
-                    passes[i].entry((*k).to_string()).or_default().push(*v);
+            frames[i].push(f.stats.total_ms);
+            for (k, v) in &f.stats.pass_ms {
+                {
+                    passes[i].entry(k.name().to_string()).or_default().push(*v);
                 }
             }
             out[i].rays = f.stats.rays;

@@ -110,14 +110,12 @@ impl<'a> RenderStats<'a> {
         bvh_ms: f64,
     ) -> Self {
         let mut time_ms = serde_json::Map::new();
-        let frame_ms = frame.time_ms.get("total").copied().unwrap_or(0.0);
+        let frame_ms = frame.total_ms;
         time_ms.insert("total".into(), (bvh_ms + frame_ms).into());
         time_ms.insert("frame".into(), frame_ms.into());
         time_ms.insert("bvh_build".into(), bvh_ms.into());
-        for (k, v) in &frame.time_ms {
-            if *k != "total" {
-                time_ms.insert((*k).into(), (*v).into());
-            }
+        for (k, v) in &frame.pass_ms {
+            time_ms.insert(k.name().into(), (*v).into());
         }
         Self {
             scene: &scene.name,

@@ -100,7 +100,7 @@ fn plan_is_printed() {
         d.join("c.png").to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert!(err.contains("skip  specular    max_depth = 0"), "{err}");
+    assert!(err.contains("skip  specular      max_depth = 0"), "{err}");
 }
 
 #[test]
@@ -269,7 +269,7 @@ fn raster_visibility_from_the_cli() {
         stats.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert!(err.contains("run   visibility  raster: z-buffer of 32 triangles"), "{err}");
+    assert!(err.contains("run   visibility    raster: z-buffer of 32 triangles"), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
     // A primary ray only where a pixel's ray leaves its rasterized triangle (edges).
     assert!(v["rays"]["primary"].as_u64().unwrap() * 100 < 64 * 48, "{}", v["rays"]);

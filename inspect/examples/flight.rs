@@ -58,7 +58,7 @@ fn main() -> anyhow::Result<()> {
         wait(&mut h, &shown)?;
         let r = h.state().result.as_ref().expect("shown");
         wall.push(r.wall_ms);
-        frame.push(r.frame.stats.time_ms["total"]);
+        frame.push(r.frame.stats.total_ms);
     }
     // The graph keeps repainting while moving: a few steps, not `run` (which waits for rest).
     h.run_steps(3);

@@ -2,7 +2,7 @@
 //! plan, times and rays on the right. All rendering happens on the [`Worker`]'s thread; this
 //! side only uploads the images it made and draws.
 
-use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, HashMap, VecDeque};
 use std::time::{Duration, Instant};
 
 use eframe::egui::{
@@ -11,7 +11,7 @@ use eframe::egui::{
 };
 use glam::Vec3 as V3;
 use hyrt::options::{Choice, Indirect, IndirectOptions, LightMaps, Options, Shadows};
-use hyrt::render::{Cache, Subject};
+use hyrt::render::{Cache, FrameStats, Subject};
 use hyrt::render::{
     Pass,
     shadows::{RAY_HINT, RAY_TRAVERSAL},
@@ -72,7 +72,7 @@ struct Sent {
 struct Sample {
     at: Instant,
     /// Milliseconds per top-level pass ([`Pass::part_of`] is `None`) and the frame's total.
-    passes: BTreeMap<&'static str, f64>,
+    passes: BTreeMap<Pass, f64>,
     total: f64,
 }
 
@@ -356,13 +356,13 @@ impl Inspector {
                 }
                 Reply::Failed(e) => self.error = Some(e),
                 Reply::Rendered(r) => {
-                    let total = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                    let total = r.frame.stats.total_ms;
                     let passes = r
                         .frame
                         .stats
-                        .time_ms
+                        .pass_ms
                         .iter()
-                        .filter(|(k, _)| top_level(k))
+                        .filter(|(k, _)| k.part_of().is_none())
                         .map(|(k, v)| (*k, *v))
                         .collect();
                     let now = Instant::now();
@@ -458,10 +458,10 @@ impl Inspector {
                 ui.label(stage);
             }
             if let Some(r) = &self.result {
-                let hyb = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                let hyb = r.frame.stats.total_ms;
                 ui.label(RichText::new(format!("hybrid frame {}", self.ms(hyb))).strong());
                 if let Some(first) = &r.first_frame {
-                    let t = first.time_ms.get("total").copied().unwrap_or(0.0);
+                    let t = first.total_ms;
                     let mut built = vec![];
                     if first.maps_built > 0 {
                         built.push("light maps");
@@ -476,7 +476,7 @@ impl Inspector {
                 }
                 match &r.comparison {
                     Some(c) => {
-                        let rf = c.reference.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                        let rf = c.reference.stats.total_ms;
                         let speed = if self.hide_times || hyb <= 0.0 {
                             "…".into()
                         } else {
@@ -599,7 +599,7 @@ impl Inspector {
             let reference = match &r.comparison {
                 Some(c) => format!(
                     "reference {}{}",
-                    self.ms(c.reference.stats.time_ms.get("total").copied().unwrap_or(0.0)),
+                    self.ms(c.reference.stats.total_ms),
                     if c.rendered { ", rendered again" } else { ", reused" }
                 ),
                 None => "no reference yet".into(),
@@ -608,7 +608,7 @@ impl Inspector {
                 "Frame {} ({}hybrid {}, {reference})",
                 r.generation,
                 if r.full { "" } else { "moving: " },
-                self.ms(r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0)),
+                self.ms(r.frame.stats.total_ms),
             ));
         }
     }
@@ -728,7 +728,7 @@ impl Inspector {
             }
         });
         egui::CollapsingHeader::new("Time per pass").default_open(true).show(ui, |ui| {
-            let first = r.first_frame.as_ref().map(|f| &f.time_ms);
+            let first = r.first_frame.as_ref();
             egui::Grid::new("times").striped(true).num_columns(3 + usize::from(first.is_some())).show(
                 ui,
                 |ui| {
@@ -739,17 +739,25 @@ impl Inspector {
                         ui.label(RichText::new("first frame").strong());
                     }
                     ui.end_row();
-                    let empty = BTreeMap::new();
-                    let h = &r.frame.stats.time_ms;
-                    let rf = r.comparison.as_ref().map_or(&empty, |c| &c.reference.stats.time_ms);
-                    let names = h.keys().chain(rf.keys()).chain(first.into_iter().flat_map(|f| f.keys()));
-                    for pass in pass_order(names.copied()) {
-                        ui.label(pass);
-                        for c in [Some(h), Some(rf), first].into_iter().flatten() {
-                            ui.label(c.get(pass).map_or("-".into(), |&v| self.ms(v)));
+                    let empty = FrameStats::default();
+                    let h = &r.frame.stats;
+                    let rf = r.comparison.as_ref().map_or(&empty, |c| &c.reference.stats);
+                    let columns = [Some(h), Some(rf), first];
+                    // Every pass any column ran, in frame order (`Pass` orders so).
+                    let passes: BTreeSet<Pass> =
+                        columns.iter().flatten().flat_map(|c| c.pass_ms.keys().copied()).collect();
+                    for pass in passes {
+                        ui.label(pass.name());
+                        for c in columns.iter().flatten() {
+                            ui.label(c.pass_ms.get(&pass).map_or("-".into(), |&v| self.ms(v)));
                         }
                         ui.end_row();
                     }
+                    ui.label("total");
+                    for c in columns.iter().flatten() {
+                        ui.label(if c.total_ms > 0.0 { self.ms(c.total_ms) } else { "-".into() });
+                    }
+                    ui.end_row();
                 },
             );
         });
@@ -809,7 +817,7 @@ impl Inspector {
             }
             _ => 0.0,
         };
-        let total = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
+        let total = r.frame.stats.total_ms;
         let fps = if self.hide_times {
             "… fps".to_string()
         } else {
@@ -832,7 +840,7 @@ impl Inspector {
             for s in &recent {
                 let x = rect.max.x - ((now - s.at).as_secs_f64() / span) as f32 * rect.width();
                 let mut y = rect.max.y;
-                for (pass, ms) in pass_order(s.passes.keys().copied()).iter().map(|k| (*k, s.passes[k])) {
+                for (&pass, &ms) in &s.passes {
                     let h = (ms / top) as f32 * (rect.height() - 4.0);
                     let r = Rect::from_min_max(Pos2::new(x - bar, y - h), Pos2::new(x, y));
                     painter.rect_filled(r, 0.0, pass_color(pass));
@@ -847,11 +855,11 @@ impl Inspector {
             FontId::proportional(11.0),
             Color32::GRAY,
         );
-        let mut seen: Vec<&str> = recent.iter().flat_map(|s| s.passes.keys().copied()).collect();
-        seen.extend(r.frame.stats.time_ms.keys().copied().filter(|k| top_level(k)));
+        let mut seen: BTreeSet<Pass> = recent.iter().flat_map(|s| s.passes.keys().copied()).collect();
+        seen.extend(r.frame.stats.pass_ms.keys().copied().filter(|p| p.part_of().is_none()));
         ui.horizontal_wrapped(|ui| {
-            for pass in pass_order(seen.into_iter()) {
-                swatch(ui, pass_color(pass), pass);
+            for pass in seen {
+                swatch(ui, pass_color(pass), pass.name());
             }
         });
     }
@@ -1036,11 +1044,11 @@ impl Inspector {
     }
 
     fn frame_view(&mut self, ui: &mut egui::Ui, r: &Rendered) {
-        let hyb = r.frame.stats.time_ms.get("total").copied().unwrap_or(0.0);
+        let hyb = r.frame.stats.total_ms;
         let wait = reference_wait(r.full, self.auto_reference);
         let (reference, difference) = match &r.comparison {
             Some(c) => {
-                let rf = c.reference.stats.time_ms.get("total").copied().unwrap_or(0.0);
+                let rf = c.reference.stats.total_ms;
                 (
                     (Some(&c.reference.image), format!("reference ({})", self.ms(rf))),
                     (Some(&c.error_heat), format!("luminance error, PSNR {}", psnr_text(c.psnr))),
@@ -1675,13 +1683,8 @@ fn reference_wait(full: bool, auto: bool) -> &'static str {
     }
 }
 
-/// Whether `name` is a pass that is not part of another (the graph stacks these).
-fn top_level(name: &str) -> bool {
-    Pass::from_name(name).is_some_and(|p| p.part_of().is_none())
-}
-
 /// A pass's colour in the frame-time graph: one per top-level pass, in frame order.
-fn pass_color(pass: &str) -> Color32 {
+fn pass_color(pass: Pass) -> Color32 {
     const COLORS: [Color32; 12] = [
         Color32::from_rgb(170, 170, 170),
         Color32::from_rgb(86, 180, 233),
@@ -1697,7 +1700,7 @@ fn pass_color(pass: &str) -> Color32 {
         Color32::from_rgb(250, 250, 250),
     ];
     let top = Pass::ALL.iter().filter(|p| p.part_of().is_none());
-    let i = top.clone().position(|p| p.name() == pass).unwrap_or(top.count());
+    let i = top.clone().position(|&p| p == pass).unwrap_or(top.count());
     COLORS[i % COLORS.len()]
 }
 
@@ -1738,15 +1741,6 @@ const RAY_ROWS: [RayRow; 8] = [
     ("VPL path", |c| c.vpl_path),
     ("total", |c| c.total()),
 ];
-
-/// Passes in pipeline order (then any others, then `total`).
-fn pass_order<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
-    let rank = hyrt::render::Pass::rank;
-    let mut v: Vec<&str> = names.collect();
-    v.sort_by_key(|n| (rank(n), *n));
-    v.dedup();
-    v
-}
 
 /// Replaces every number followed by " ms" with "…" (for snapshots).
 pub fn mask_ms(s: &str) -> String {
@@ -1902,11 +1896,5 @@ mod tests {
         assert_eq!(mask_ms("reused: built once (12.5 ms), 3 lights"), "reused: built once (… ms), 3 lights");
         assert_eq!(mask_ms("1.0 ms and 2 ms, 3 px"), "… ms and … ms, 3 px");
         assert_eq!(mask_ms("no times"), "no times");
-    }
-
-    #[test]
-    fn passes_in_pipeline_order() {
-        let v = pass_order(["total", "direct", "aaa", "visibility", "classify", "direct"].into_iter());
-        assert_eq!(v, vec!["visibility", "classify", "direct", "aaa", "total"]);
     }
 }

@@ -144,7 +144,7 @@ fn a_knob_change_renders_again_and_shows_the_new_frame() {
     let first = h.state().result.as_ref().expect("rendered").generation;
     let time = |h: &Harness<'static, Inspector>| {
         let r = h.state().result.as_ref().expect("rendered");
-        format!("hybrid frame {:.1} ms", r.frame.stats.time_ms["total"])
+        format!("hybrid frame {:.1} ms", r.frame.stats.total_ms)
     };
     h.get_by_label(&time(&h));
 

@@ -26,70 +26,133 @@ use rayon::prelude::*;
 pub use crate::classify::Decision;
 
 /// Border pixels of a row-major `width x height` occlusion map (see the module docs): `true`
-/// where a 4-neighbour holds the other decision.
+/// where a 4-neighbour holds the other decision. One light of [`laplacian_border_bits`].
 ///
 /// # Panics
 ///
 /// If `occ.len() != width * height`.
 pub fn laplacian_border(occ: &[Decision], width: usize, height: usize) -> Vec<bool> {
     assert_eq!(occ.len(), width * height, "occlusion map size");
-    let mut out = vec![false; occ.len()];
-    if width == 0 {
-        return out;
+    let faces: Vec<u8> = occ.iter().map(|&d| u8::from(d != Decision::NotNeeded)).collect();
+    let lit: Vec<u8> = occ.iter().map(|&d| u8::from(d == Decision::Lit)).collect();
+    let mut out = vec![0u8; occ.len()];
+    laplacian_border_bits(&faces, &lit, 1, width, height, &mut out);
+    out.into_iter().map(|b| b != 0).collect()
+}
+
+/// [`laplacian_border`] of up to `8 stride` lights at once, eight per byte operation. Each
+/// pixel has `stride` bytes in each buffer, light `l` in bit `l % 8` of byte `l / 8`: `faces`
+/// says which lights have a decision there (not [`Decision::NotNeeded`]), `lit` which of those
+/// are lit. The border bits are ORed into `out` (so that a caller may start from other borders).
+///
+/// # Panics
+///
+/// If a buffer does not hold `width * height * stride` bytes.
+pub fn laplacian_border_bits(
+    faces: &[u8],
+    lit: &[u8],
+    stride: usize,
+    width: usize,
+    height: usize,
+    out: &mut [u8],
+) {
+    let n = width * height * stride;
+    assert!(faces.len() == n && lit.len() == n && out.len() == n, "bit buffer sizes");
+    if n == 0 {
+        return;
     }
-    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        let at = |x: usize, y: usize| occ[y * width + x];
-        for (x, b) in row.iter_mut().enumerate() {
-            let v = at(x, y);
-            let other = match v {
-                Decision::Lit => Decision::Shadow,
-                Decision::Shadow => Decision::Lit,
-                Decision::NotNeeded => continue,
-            };
-            *b = (x > 0 && at(x - 1, y) == other)
-                || (x + 1 < width && at(x + 1, y) == other)
-                || (y > 0 && at(x, y - 1) == other)
-                || (y + 1 < height && at(x, y + 1) == other);
+    out.par_chunks_mut(width * stride).enumerate().for_each(|(y, row)| {
+        for x in 0..width {
+            let p = y * width + x;
+            for b in 0..stride {
+                let k = p * stride + b;
+                let f = faces[k];
+                if f == 0 {
+                    continue;
+                }
+                let li = lit[k];
+                let mut o = 0;
+                let mut differ = |q: usize| o |= f & faces[q * stride + b] & (li ^ lit[q * stride + b]);
+                if x > 0 {
+                    differ(p - 1);
+                }
+                if x + 1 < width {
+                    differ(p + 1);
+                }
+                if y > 0 {
+                    differ(p - width);
+                }
+                if y + 1 < height {
+                    differ(p + width);
+                }
+                row[x * stride + b] |= o;
+            }
         }
     });
-    out
 }
 
 /// Marks every pixel within Chebyshev distance `r` of a `true` pixel of `mask` (row-major,
-/// `width x height`): a square max filter, done as a horizontal then a vertical pass.
+/// `width x height`): a square max filter. One light of [`dilate_bits`].
 ///
 /// # Panics
 ///
 /// If `mask.len() != width * height`.
 pub fn dilate(mask: &[bool], width: usize, height: usize, r: usize) -> Vec<bool> {
     assert_eq!(mask.len(), width * height, "mask size");
-    if r == 0 || width == 0 {
-        return mask.to_vec();
+    let mut bits: Vec<u8> = mask.iter().map(|&m| u8::from(m)).collect();
+    dilate_bits(&mut bits, None, 1, width, height, r);
+    bits.into_iter().map(|b| b != 0).collect()
+}
+
+/// [`dilate`] of up to `8 stride` lights at once (bits laid out as in
+/// [`laplacian_border_bits`]), in place: a horizontal then a vertical pass of byte ORs. With
+/// `within`, only its bits are kept (the pixels with a decision).
+///
+/// # Panics
+///
+/// If `mask` (or `within`) does not hold `width * height * stride` bytes.
+pub fn dilate_bits(
+    mask: &mut [u8],
+    within: Option<&[u8]>,
+    stride: usize,
+    width: usize,
+    height: usize,
+    r: usize,
+) {
+    let n = width * height * stride;
+    assert!(mask.len() == n && within.is_none_or(|w| w.len() == n), "bit buffer sizes");
+    if r == 0 || n == 0 {
+        if let Some(w) = within {
+            mask.iter_mut().zip(w).for_each(|(m, &w)| *m &= w);
+        }
+        return;
     }
-    // Horizontal: a pixel is marked if a marked pixel is within r in its row. Prefix counts make
-    // it O(1) per pixel for any radius.
-    let mut rows = vec![false; mask.len()];
-    rows.par_chunks_mut(width).zip(mask.par_chunks(width)).for_each(|(out, row)| {
-        let mut prefix = vec![0u32; width + 1];
-        for (x, &m) in row.iter().enumerate() {
-            prefix[x + 1] = prefix[x] + u32::from(m);
-        }
-        for (x, o) in out.iter_mut().enumerate() {
-            let (a, b) = (x.saturating_sub(r), (x + r + 1).min(width));
-            *o = prefix[b] > prefix[a];
-        }
-    });
-    // Vertical, on the horizontal result, a row of output at a time.
-    let mut out = vec![false; mask.len()];
-    out.par_chunks_mut(width).enumerate().for_each(|(y, o)| {
-        let (a, b) = (y.saturating_sub(r), (y + r + 1).min(height));
-        for yy in a..b {
-            for (o, &m) in o.iter_mut().zip(&rows[yy * width..(yy + 1) * width]) {
-                *o |= m;
+    let row_bytes = width * stride;
+    // Horizontal: a pixel is marked if a marked pixel is within r in its row.
+    let mut rows = vec![0u8; n];
+    rows.par_chunks_mut(row_bytes).zip(mask.par_chunks(row_bytes)).for_each(|(out, row)| {
+        for x in 0..width {
+            for xx in x.saturating_sub(r)..(x + r + 1).min(width) {
+                for b in 0..stride {
+                    out[x * stride + b] |= row[xx * stride + b];
+                }
             }
         }
     });
-    out
+    // Vertical, on the horizontal result, a row of output at a time.
+    mask.par_chunks_mut(row_bytes).enumerate().for_each(|(y, out)| {
+        out.fill(0);
+        for yy in y.saturating_sub(r)..(y + r + 1).min(height) {
+            for (o, &m) in out.iter_mut().zip(&rows[yy * row_bytes..(yy + 1) * row_bytes]) {
+                *o |= m;
+            }
+        }
+        if let Some(w) = within {
+            for (o, &f) in out.iter_mut().zip(&w[y * row_bytes..(y + 1) * row_bytes]) {
+                *o &= f;
+            }
+        }
+    });
 }
 
 #[cfg(test)]
@@ -150,6 +213,54 @@ mod tests {
         let mut mask = vec![false; w * h];
         mask[0] = true;
         assert_eq!(dilate(&mask, w, h, 1).iter().filter(|&&m| m).count(), 4);
+    }
+
+    /// Many lights packed eight to a byte give, light by light, what one light alone gives
+    /// (so the renderer's packed pass is these tested functions).
+    #[test]
+    fn packed_lights_equal_one_light_at_a_time() {
+        let (w, h, lights) = (23usize, 17usize, 19usize);
+        let stride = lights.div_ceil(8);
+        // A fixed pseudo-random pattern per light: decisions, lit, and none.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let occ: Vec<Vec<Decision>> = (0..lights)
+            .map(|_| {
+                (0..w * h)
+                    .map(|_| match next() % 5 {
+                        0 => Decision::NotNeeded,
+                        1 | 2 => Decision::Lit,
+                        _ => Decision::Shadow,
+                    })
+                    .collect()
+            })
+            .collect();
+        let pack = |f: &dyn Fn(usize, usize) -> bool| -> Vec<u8> {
+            let mut v = vec![0u8; w * h * stride];
+            for (l, i) in (0..lights).flat_map(|l| (0..w * h).map(move |i| (l, i))) {
+                if f(l, i) {
+                    v[i * stride + l / 8] |= 1 << (l % 8);
+                }
+            }
+            v
+        };
+        let faces = pack(&|l, i| occ[l][i] != Decision::NotNeeded);
+        let lit = pack(&|l, i| occ[l][i] == Decision::Lit);
+        let mut border = vec![0u8; w * h * stride];
+        laplacian_border_bits(&faces, &lit, stride, w, h, &mut border);
+        let one: Vec<Vec<bool>> = occ.iter().map(|o| laplacian_border(o, w, h)).collect();
+        assert_eq!(border, pack(&|l, i| one[l][i]));
+        for r in 0..3 {
+            let mut dilated = border.clone();
+            dilate_bits(&mut dilated, Some(&faces), stride, w, h, r);
+            let one: Vec<Vec<bool>> = one.iter().map(|b| dilate(b, w, h, r)).collect();
+            assert_eq!(dilated, pack(&|l, i| one[l][i] && occ[l][i] != Decision::NotNeeded), "r {r}");
+        }
     }
 
     #[test]

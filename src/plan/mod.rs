@@ -128,6 +128,10 @@ impl Plan {
                         );
                     } else {
                         plan.skip(Pass::Borders, "shadows by maps alone: no borders, no rays".into());
+                        plan.skip(
+                            Pass::ShadowRays,
+                            "shadows by maps alone: the map's decision is final".into(),
+                        );
                     }
                     plan.skip(
                         Pass::Direct,
@@ -153,31 +157,60 @@ impl Plan {
             );
         }
         let io = &opts.indirect_opts;
-        match opts.indirect {
-            Indirect::None => plan.skip(Pass::Indirect, "no indirect-light settings (VPLs) requested".into()),
-            _ if count == 0 => plan.skip(Pass::Indirect, "no point lights to place VPLs from".into()),
-            _ if io.vpl.paths == 0 || io.vpl.bounces == 0 => {
-                plan.skip(Pass::Indirect, "0 VPL paths or bounces requested".into())
+        let none = match opts.indirect {
+            Indirect::None => Some("no indirect-light settings (VPLs) requested"),
+            _ if count == 0 => Some("no point lights to place VPLs from"),
+            _ if io.vpl.paths == 0 || io.vpl.bounces == 0 => Some("0 VPL paths or bounces requested"),
+            _ => None,
+        };
+        match (none, opts.indirect) {
+            (Some(why), _) => plan.skip(Pass::Indirect, why.into()),
+            (None, Indirect::Rays) => {
+                plan.run(
+                    Pass::VplGen,
+                    format!(
+                        "{} VPL path(s) of {} bounce(s), traced once and cached",
+                        io.vpl.paths, io.vpl.bounces
+                    ),
+                );
+                plan.skip(Pass::VplMapBuild, "VPL visibility by rays: no VPL maps".into());
+                plan.run(
+                    Pass::Indirect,
+                    format!(
+                        "{} VPL path(s), {} bounce(s), visibility by one shadow ray per hit and VPL",
+                        io.vpl.paths, io.vpl.bounces
+                    ),
+                );
             }
-            Indirect::Rays => plan.run(Pass::Indirect,
-                format!(
-                    "{} VPL path(s), {} bounce(s), visibility by one shadow ray per hit and VPL",
-                    io.vpl.paths, io.vpl.bounces
-                ),
-            ),
-            Indirect::Maps => plan.run(Pass::Indirect,
-                format!(
-                    "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map of {} per VPL (built once)",
-                    io.vpl.paths,
-                    io.vpl.bounces,
-                    match io.format {
-                        hyrt_shadowmap::vpl_map::VplFormat::Planes => "planes",
-                        hyrt_shadowmap::vpl_map::VplFormat::Depth16 => "16-bit depths",
-                    },
-                    n = io.map.resolution
-                ),
-            ),
+            (None, _) => {
+                let n = io.map.resolution;
+                let format = match io.format {
+                    hyrt_shadowmap::vpl_map::VplFormat::Planes => "planes",
+                    hyrt_shadowmap::vpl_map::VplFormat::Depth16 => "16-bit depths",
+                };
+                plan.run(
+                    Pass::VplGen,
+                    format!(
+                        "{} VPL path(s) of {} bounce(s), traced once and cached",
+                        io.vpl.paths, io.vpl.bounces
+                    ),
+                );
+                plan.run(
+                    Pass::VplMapBuild,
+                    format!("one {n}x{n} paraboloid map of {format} per VPL, built once and cached"),
+                );
+                plan.run(Pass::Indirect,
+                    format!(
+                        "{} VPL path(s), {} bounce(s), visibility by one {n}x{n} paraboloid map of {format} per VPL (built once)",
+                        io.vpl.paths,
+                        io.vpl.bounces,
+                    ),
+                );
+            }
         }
+        // In the order a frame runs them.
+        plan.run.sort_by_key(|d| d.pass);
+        plan.skipped.sort_by_key(|d| d.pass);
         plan
     }
 
@@ -228,10 +261,10 @@ fn mirror_reasons(mirrors: &[&crate::scene::Material]) -> String {
 impl std::fmt::Display for Plan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         for d in &self.run {
-            writeln!(f, "  run   {:<11} {}", d.pass, d.reason)?;
+            writeln!(f, "  run   {:<13} {}", d.pass, d.reason)?;
         }
         for d in &self.skipped {
-            writeln!(f, "  skip  {:<11} {}", d.pass, d.reason)?;
+            writeln!(f, "  skip  {:<13} {}", d.pass, d.reason)?;
         }
         Ok(())
     }

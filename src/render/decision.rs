@@ -97,7 +97,7 @@ impl FrameDecision {
 pub fn format_decisions(d: &[FrameDecision]) -> String {
     d.iter()
         .map(|d| {
-            format!("  {}  {:<11} {}\n", if d.run { "run " } else { "skip" }, d.what.to_string(), d.reason)
+            format!("  {}  {:<13} {}\n", if d.run { "run " } else { "skip" }, d.what.to_string(), d.reason)
         })
         .collect()
 }

@@ -6,78 +6,16 @@
 //! first frame and kept.
 
 use std::f32::consts::FRAC_1_PI;
-use std::sync::OnceLock;
-use std::time::Instant;
 
 use glam::Vec3;
-use hyrt_shadowmap::vpl_map::{Holes, VplMap};
+use hyrt_shadowmap::vpl_map::VplMap;
 use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
-use crate::render::{Cache, FrameDecision, Run, Subject};
-
 use super::gather::{self, Points, ShadePoint, Sums, VplConsts};
-use super::{FrameStats, Indirect, Progress, Renderer, SurfaceHit, vpl};
+use super::{Progress, Renderer, SurfaceHit, vpl};
 
 pub use crate::options::{IndirectOptions, VplFilter};
-
-/// Per-renderer VPLs and VPL maps.
-#[derive(Default)]
-pub(crate) struct VplCache {
-    vpls: OnceLock<(Vec<vpl::Vpl>, RayCounts)>,
-    maps: OnceLock<Vec<VplMap>>,
-    /// Why the cache was emptied, for the decision of the frame that fills it again.
-    cause: Option<&'static str>,
-    /// After lights moved ([`VplCache::relight`]): the VPLs and maps from before, which the
-    /// next frame keeps for the lights that did not move.
-    previous: std::sync::Mutex<Option<Previous>>,
-}
-
-/// The VPLs (and maps) of a cache some of whose lights moved.
-struct Previous {
-    vpls: Vec<vpl::Vpl>,
-    maps: Option<Vec<VplMap>>,
-    /// Per light, whether it moved (its VPLs are traced again).
-    moved: Vec<bool>,
-}
-
-impl Renderer<'_> {
-    /// The cached VPLs and, with `Indirect::Maps`, their maps (for inspection), once a frame
-    /// has made them.
-    pub fn cached_vpls(&self) -> Option<(&[vpl::Vpl], &[VplMap])> {
-        let (vpls, _) = self.vpl_cache.vpls.get()?;
-        Some((vpls, self.vpl_cache.maps.get().map_or(&[][..], |m| &m[..])))
-    }
-}
-
-impl VplCache {
-    /// An empty cache, emptied for `cause` (said by the next frame's decisions).
-    pub(crate) fn dropped_because(cause: &'static str) -> Self {
-        Self { cause: Some(cause), ..Self::default() }
-    }
-
-    /// Drops the VPL maps (made with other map options), keeping the VPLs.
-    pub(crate) fn drop_maps(&mut self) {
-        self.maps = OnceLock::new();
-        if let Some(p) = self.previous.get_mut().unwrap_or_else(|e| e.into_inner()) {
-            p.maps = None;
-        }
-    }
-
-    /// Light `l` (of `lights`) moved, with the same intensity: the next frame traces its
-    /// VPLs again and builds their maps, and keeps the other lights' VPLs and maps
-    /// ([`vpl::generate_from`]: they are the ones a fresh renderer would make).
-    pub(crate) fn relight(&mut self, l: usize, lights: usize) {
-        let previous = self.previous.get_mut().unwrap_or_else(|e| e.into_inner());
-        if let Some((vpls, _)) = self.vpls.take() {
-            *previous = Some(Previous { vpls, maps: self.maps.take(), moved: vec![false; lights] });
-        }
-        if let Some(p) = previous.as_mut().filter(|p| l < p.moved.len()) {
-            p.moved[l] = true;
-        }
-        self.cause = Some("a light moved");
-    }
-}
 
 /// What the indirect pass needs per frame.
 pub struct Vpls<'r> {
@@ -91,159 +29,10 @@ pub struct Vpls<'r> {
 }
 
 impl Renderer<'_> {
-    /// The VPLs and, with `Indirect::Maps`, their maps; made on the first call (timed in
-    /// `stats` as `vpl_gen` and `vpl_map_build`, with the path rays counted), then cached.
-    pub(crate) fn vpls(&self, stats: &mut FrameStats) -> Vpls<'_> {
+    /// What the indirect pass needs of the VPLs and their maps (`maps` empty with
+    /// `Indirect::Rays`).
+    pub(crate) fn vpls<'r>(&self, vpls: &'r [vpl::Vpl], maps: &'r [VplMap]) -> Vpls<'r> {
         let opts = &self.options.indirect_opts;
-        let t = Instant::now();
-        let mut fresh = false;
-        let previous = self.vpl_cache.previous.lock().unwrap_or_else(|e| e.into_inner()).take();
-        // With lights moved: the VPLs traced again, of how many.
-        let mut retraced = None;
-        let (vpls, _) = self.vpl_cache.vpls.get_or_init(|| {
-            fresh = true;
-            match &previous {
-                Some(p) => {
-                    let (new, counts) =
-                        vpl::generate_from(self.scene, &self.lights, &self.tracer, &opts.vpl, &p.moved);
-                    retraced = Some(new.len());
-                    // In light order, as `generate` makes them.
-                    let merged = (0..self.lights.len() as u32)
-                        .flat_map(|l| {
-                            let from = if p.moved[l as usize] { &new } else { &p.vpls };
-                            from.iter().filter(move |v| v.light == l).copied()
-                        })
-                        .collect();
-                    (merged, counts)
-                }
-                None => vpl::generate(self.scene, &self.lights, &self.tracer, &opts.vpl),
-            }
-        });
-        if fresh {
-            stats.rays += self.vpl_cache.vpls.get().expect("just made").1;
-        }
-        let cause = self.vpl_cache.cause.map_or(String::new(), |c| format!(" ({c})"));
-        stats.decisions.push(
-            FrameDecision::new(
-                Subject::Vpls,
-                Run::when(fresh),
-                if let Some(m) = retraced {
-                    format!(
-                        "{} VPLs: {m} traced again from the moved light(s), {} reused{cause} in {:.1} ms",
-                        vpls.len(),
-                        vpls.len() - m,
-                        super::ms(t)
-                    )
-                } else if fresh {
-                    format!(
-                        "{} VPLs generated from {} light path(s){cause} in {:.1} ms",
-                        vpls.len(),
-                        opts.vpl.paths,
-                        super::ms(t)
-                    )
-                } else {
-                    format!("{} VPLs reused from an earlier frame", vpls.len())
-                },
-            )
-            .with_cache(if fresh { Cache::Built } else { Cache::Reused }),
-        );
-        stats.record(super::Pass::VplGen, t);
-        let t = Instant::now();
-        let mut fresh = false;
-        let mut built = 0;
-        let maps: &[VplMap] = if self.options.indirect == Indirect::Maps {
-            self.vpl_cache.maps.get_or_init(|| {
-                fresh = true;
-                let planes = self.occluders().0;
-                // The maps of VPLs kept from before (lights that did not move), in order.
-                let mut kept: Vec<Option<VplMap>> = match previous {
-                    Some(Previous { vpls: old, maps: Some(maps), moved }) => {
-                        let mut by_light: Vec<std::collections::VecDeque<VplMap>> =
-                            (0..moved.len()).map(|_| Default::default()).collect();
-                        for (v, m) in old.iter().zip(maps) {
-                            by_light[v.light as usize].push_back(m);
-                        }
-                        vpls.iter()
-                            .map(|v| {
-                                let l = v.light as usize;
-                                if moved[l] { None } else { by_light[l].pop_front() }
-                            })
-                            .collect()
-                    }
-                    _ => vpls.iter().map(|_| None).collect(),
-                };
-                // Cut-outs: a texel that sees a hole holds what lies behind it (decided at the
-                // texel's centre, `shadows::sees_hole`).
-                let cutouts = self.cutouts();
-                let solid: Vec<[Vec3; 3]> = if cutouts.is_empty() {
-                    Vec::new()
-                } else {
-                    let gone = [Vec3::NAN; 3];
-                    self.scene
-                        .positions
-                        .iter()
-                        .zip(cutouts)
-                        .map(|(t, &c)| if c { gone } else { *t })
-                        .collect()
-                };
-                // Maps in parallel as well as inside each build: a small map's build has too
-                // little work per parallel step to keep both cores busy alone.
-                let new: Vec<(usize, VplMap)> = (0..vpls.len())
-                    .into_par_iter()
-                    .filter(|&i| kept[i].is_none())
-                    .map(|i| {
-                        let v = &vpls[i];
-                        let hole =
-                            |id: u32, dir: Vec3| super::shadows::sees_hole(self.scene, v.position, id, dir);
-                        let holes = Holes { cutouts, solid: &solid, hole: &hole };
-                        (
-                            i,
-                            VplMap::build_with_holes(
-                                &self.scene.positions,
-                                planes,
-                                v.position,
-                                v.normal,
-                                &opts.map,
-                                opts.format,
-                                (!cutouts.is_empty()).then_some(&holes),
-                            ),
-                        )
-                    })
-                    .collect();
-                built = new.len();
-                for (i, m) in new {
-                    kept[i] = Some(m);
-                }
-                kept.into_iter().map(|m| m.expect("kept or built")).collect()
-            })
-        } else {
-            &[]
-        };
-        stats.record(super::Pass::VplMapBuild, t);
-        if self.options.indirect == Indirect::Maps {
-            let n = self.options.indirect_opts.map.resolution;
-            stats.decisions.push(FrameDecision::new(
-                Subject::VplMaps,
-                Run::when(fresh),
-                if fresh && built < maps.len() {
-                    format!(
-                        "{built} of {} paraboloid maps of {n}x{n} built{cause}, the others reused, in {:.1} ms",
-                        maps.len(),
-                        super::ms(t)
-                    )
-                } else if fresh {
-                    format!(
-                        "{} paraboloid maps of {n}x{n} built{cause} in {:.1} ms",
-                        maps.len(),
-                        super::ms(t)
-                    )
-                } else {
-                    format!("{} maps reused from an earlier frame", maps.len())
-                },
-            ).with_cache(if fresh { Cache::Built } else { Cache::Reused }));
-        }
-        stats.vpls = vpls.len() as u32;
-        stats.vpl_map_bytes = maps.iter().map(|m| m.memory_bytes() as u64).sum();
         let diag = self.bounds.map_or(1.0, |(lo, hi)| (hi - lo).length());
         let clamp = opts.clamp.max(0.0) * diag;
         let clamp2 = clamp * clamp;
@@ -493,7 +282,7 @@ pub(crate) fn run(
         })
         .collect();
 
-    let filtered = if k > 1 { interleave_filter(&irr, &geo, w, k) } else { irr };
+    let filtered = if k > 1 { super::interleave::filter(&irr, &geo, w, k) } else { irr };
     out.par_iter_mut().zip(filtered).enumerate().for_each(|(i, (o, e))| {
         if let Some(h) = &gbuffer[i]
             && r.diffuse(h.tri)
@@ -558,48 +347,10 @@ fn gather_all(
     (RayCounts::default(), pairs)
 }
 
-/// The geometry-aware `k x k` box filter of interleaved sampling (see [`run`]), on the
-/// per-pixel sums `irr` of `k^2`-strided VPL subsets; `geo` holds each pixel's shading normal
-/// and camera distance (0: no diffuse point).
-fn interleave_filter(irr: &[Vec3], geo: &[[f32; 4]], w: usize, k: usize) -> Vec<Vec3> {
-    let h = irr.len() / w;
-    let lo = k / 2;
-    let scale = (k * k) as f32;
-    (0..irr.len())
-        .into_par_iter()
-        .map(|i| {
-            let [nx, ny, nz, t] = geo[i];
-            if t == 0.0 {
-                return Vec3::ZERO;
-            }
-            let ns = Vec3::new(nx, ny, nz);
-            let (x, y) = (i % w, i / w);
-            let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
-            // A window of k consecutive columns and rows holds every residue once; near the
-            // image border it is shifted inside.
-            let x0 = x.saturating_sub(lo).min(w.saturating_sub(k));
-            let y0 = y.saturating_sub(lo).min(h.saturating_sub(k));
-            for yy in y0..(y0 + k).min(h) {
-                for xx in x0..(x0 + k).min(w) {
-                    let j = yy * w + xx;
-                    let [mx, my, mz, u] = geo[j];
-                    if u != 0.0 && ns.dot(Vec3::new(mx, my, mz)) >= 0.9 && (t - u).abs() <= 0.05 * t {
-                        sum += irr[j];
-                        weight += 1.0;
-                    }
-                }
-            }
-            // The pixel itself always passes, so `weight >= 1`. Each pixel's subset sum times
-            // `k^2` estimates the full sum; the filter returns the mean of those estimates.
-            sum * (scale / weight)
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::Options;
+    use crate::render::{Indirect, Options};
 
     /// The indirect pass (without interleaving) gives, at every pixel, the bytes of
     /// [`Vpls::at`] at that pixel's camera hit: with VPL rays, and with VPL maps, whether the
@@ -614,7 +365,7 @@ mod tests {
             o.indirect_opts.vpl.paths = 12;
             o.indirect_opts.map.resolution = 64;
             let r = Renderer::new(&scene, o);
-            let v = r.vpls(&mut FrameStats::default());
+            let v = r.test_vpls();
             let (gbuffer, _) = r.visibility();
             let w = scene.settings.width as usize;
             let hit = |i: usize| {
@@ -653,7 +404,7 @@ mod tests {
         o.indirect = Indirect::Maps;
         o.indirect_opts.map.resolution = 64;
         let r = Renderer::new(&scene, o);
-        let v = r.vpls(&mut FrameStats::default());
+        let v = r.test_vpls();
         assert!(v.batched(&r) && v.vpls.len() > 10);
         let (gbuffer, _) = r.visibility();
         let w = scene.settings.width as usize;
@@ -691,12 +442,12 @@ mod tests {
             o.indirect = Indirect::Maps;
             o.indirect_opts.map.resolution = 64;
             let r = Renderer::new(&scene, o);
-            let v = r.vpls(&mut FrameStats::default());
+            let v = r.test_vpls();
             let (gbuffer, _) = r.visibility();
             let n = gbuffer.len();
             let (mut direct, mut points) = (vec![Vec3::ZERO; n], vec![ShadePoint::default(); n]);
             if hybrid {
-                r.shadowing(&gbuffer, &mut direct, Some(&mut points), &|| {}, &mut FrameStats::default());
+                r.test_shadowing(&gbuffer, &mut direct, Some(&mut points), false);
             } else {
                 crate::render::direct::run(&r, &gbuffer, &mut direct, Some(&mut points), &|| {});
             }

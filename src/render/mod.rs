@@ -1,33 +1,32 @@
 //! One rendering pipeline whose stages take a strategy.
 //!
-//! A frame is a short sequence of passes over named, screen-sized buffers:
-//!
-//! ```text
-//! visibility  -> gbuffer: Vec<Option<Hit>>             (Visibility::Rays: primary rays,
-//!                                                       Visibility::Raster: z-buffer)
-//! direct      -> direct:  Vec<Vec3>                    (Shadows::Rays: one shadow ray per light;
-//!                                                       map-based shadows: `shadows`' passes)
-//! specular    -> specular: Vec<Vec3>                   (mirror paths, their hits shaded as above)
-//! compose     -> Film = direct + specular
-//! ```
-//!
-//! The reference (Whitted) renderer and, in later work, the hybrid one are two configurations
-//! of [`Options`], never two renderers. Which passes run is decided by the [`Plan`].
+//! The reference (Whitted) renderer and the hybrid one are two configurations of [`Options`],
+//! never two renderers. A [`Renderer`] holds what frames share and cache (the BVH, the plan,
+//! the light maps, the VPLs); a frame (`frame`) is the plan's passes in order over named
+//! buffers, run and timed by one runner (`runner`). One concept per module: `visibility`,
+//! `light` (a light seen from a point), `shadows` (map-based shadows: marking, the map cache,
+//! classify, borders, border rays), `direct` (the reference's direct light), `vpl` and
+//! `vpl_cache` (instant radiosity's lights), `indirect` and `gather` (indirect light),
+//! `specular` (mirror paths).
 
 pub mod cull;
 mod decision;
 pub mod direct;
+mod frame;
 mod gather;
 pub mod indirect;
+mod interleave;
 pub mod light;
 mod pixel_rays;
+mod runner;
 pub mod shadows;
 pub mod specular;
 pub mod surface;
 pub mod visibility;
 pub mod vpl;
+mod vpl_cache;
 
-use std::{collections::BTreeMap, time::Instant};
+use std::collections::BTreeMap;
 
 use glam::Vec3;
 use hyrt_tracer::{Hit, Ray, RayCounts, Tracer};
@@ -58,17 +57,18 @@ pub struct FrameStats {
     /// (diffuse camera point, VPL) pairs the indirect pass evaluated (each pixel's VPL subset
     /// under interleaving; mirror hits not included): the unit of its cost per pair.
     pub vpl_pairs: u64,
-    /// Milliseconds per pass ([`Pass::name`]), plus `total` for the frame (scene preparation
-    /// excluded).
-    pub time_ms: BTreeMap<&'static str, f64>,
+    /// Milliseconds per pass that ran (its parts, [`Pass::part_of`], included apart).
+    pub pass_ms: BTreeMap<Pass, f64>,
+    /// Milliseconds of the whole frame (scene preparation excluded).
+    pub total_ms: f64,
     /// What this frame rebuilt or reused, and the per-light decisions of map-based shadows.
     pub decisions: Vec<crate::render::FrameDecision>,
 }
 
 impl FrameStats {
-    /// Records the time of `pass`, begun at `start`.
-    pub fn record(&mut self, pass: Pass, start: Instant) {
-        self.time_ms.insert(pass.name(), ms(start));
+    /// Milliseconds of `pass` in this frame; 0 where it did not run.
+    pub fn ms(&self, pass: Pass) -> f64 {
+        self.pass_ms.get(&pass).copied().unwrap_or(0.0)
     }
 }
 
@@ -106,7 +106,7 @@ pub struct Renderer<'a> {
     /// Light maps, built on first use and kept while the scene is unchanged.
     maps: shadows::MapCache,
     /// VPLs and their maps, likewise.
-    vpl_cache: indirect::VplCache,
+    vpl_cache: vpl_cache::VplCache,
     /// Rays per pixel, with `Options::keep_buffers`.
     pub(crate) pixel_rays: pixel_rays::PixelRays,
     /// The G-buffer of the last frame, reused by the next: the visibility pass overwrites every
@@ -230,7 +230,7 @@ impl<'a> Renderer<'a> {
         }
         let (a, b) = (&old.indirect_opts, &options.indirect_opts);
         if a.vpl != b.vpl {
-            self.vpl_cache = indirect::VplCache::dropped_because("the VPL knobs changed");
+            self.vpl_cache = vpl_cache::VplCache::dropped_because("the VPL knobs changed");
             dropped.push("VPLs and their maps");
         } else if a.map != b.map {
             self.vpl_cache.drop_maps();
@@ -299,7 +299,7 @@ impl<'a> Renderer<'a> {
             self.vpl_cache.relight(l, self.lights.len());
             dropped.push("the light's VPLs and their maps");
         } else {
-            self.vpl_cache = indirect::VplCache::dropped_because("a light's intensity changed");
+            self.vpl_cache = vpl_cache::VplCache::dropped_because("a light's intensity changed");
             dropped.push("VPLs and their maps");
         }
         self.plan = Plan::with_lights(self.scene, &self.lights, &self.options);
@@ -321,9 +321,9 @@ impl<'a> Renderer<'a> {
     /// Give the G-buffer back with [`Renderer::recycle_gbuffer`] to spare the next pass its
     /// allocation, as frames do.
     pub fn visibility(&self) -> (Vec<Option<Hit>>, FrameStats) {
-        let mut stats = FrameStats::default();
-        let (g, _) = visibility::run(self, &|| {}, &mut stats, false);
-        (g, stats)
+        let mut run = runner::Runner::new(&self.plan);
+        let (g, _) = visibility::run(self, &|| {}, &mut run, false);
+        (g, run.finish())
     }
 
     /// What the rasterizer processed in the last raster visibility pass (all zero before one):
@@ -347,109 +347,6 @@ impl<'a> Renderer<'a> {
         }
         g
     }
-
-    /// Renders one frame.
-    pub fn render(&self, progress: Progress) -> Frame {
-        let start = Instant::now();
-        self.pixel_rays.clear();
-        let mut stats = FrameStats::default();
-        let (w, h) = (self.scene.settings.width, self.scene.settings.height);
-        let n = w as usize * h as usize;
-
-        let shades = self.plan.runs(Pass::Direct) || self.plan.runs(Pass::Classify);
-        // With raster visibility and SMeRTS, the few pixels that need a primary ray (at
-        // triangle edges) get it after the map passes, which need no BVH: a background build
-        // of the BVH (`Renderer::new`) then overlaps them. Those pixels' lights are all decided
-        // by rays.
-        let defer = shades
-            && self.options.visibility == Visibility::Raster
-            && self.options.shadows == Shadows::Smerts;
-        let t = Instant::now();
-        let (mut gbuffer, deferred) = visibility::run(self, progress, &mut stats, defer);
-        stats.record(Pass::Visibility, t);
-
-        let mut direct = vec![Vec3::ZERO; n];
-        // The diffuse shading points, made by the direct-light pass for the VPL maps' gather.
-        let mut points = (self.plan.runs(Pass::Indirect) && self.options.indirect == Indirect::Maps)
-            .then(|| vec![gather::ShadePoint::default(); n]);
-        let mut shadowing = None;
-        if !shades {
-            points = None;
-        }
-        if shades {
-            if self.options.shadows != Shadows::Rays {
-                let mut s =
-                    self.shadowing(&gbuffer, &mut direct, points.as_deref_mut(), progress, &mut stats);
-                let t = Instant::now();
-                if !deferred.is_empty() {
-                    stats.rays += visibility::resolve_deferred(self, &mut gbuffer, &deferred);
-                    s.add_ray_pixels(self, &gbuffer, &deferred, points.as_deref_mut());
-                }
-                stats.rays += s.trace(self, &gbuffer, &mut direct, self.options.check_visibility);
-                stats.record(Pass::ShadowRays, t);
-                stats.lights = s.lights.clone();
-                shadowing = Some(s);
-            } else {
-                let t = Instant::now();
-                stats.rays += direct::run(self, &gbuffer, &mut direct, points.as_deref_mut(), progress);
-                stats.record(Pass::Direct, t);
-            }
-        }
-
-        let mut indirect = vec![Vec3::ZERO; n];
-        let vpls = self.plan.runs(Pass::Indirect).then(|| self.vpls(&mut stats));
-        if let Some(v) = &vpls {
-            let t = Instant::now();
-            let (rays, pairs) = indirect::run(self, v, &gbuffer, points.as_deref(), &mut indirect, progress);
-            stats.rays += rays;
-            stats.vpl_pairs = pairs;
-            stats.record(Pass::Indirect, t);
-        }
-
-        let mut spec = vec![Vec3::ZERO; n];
-        if self.plan.runs(Pass::Specular) {
-            let t = Instant::now();
-            stats.rays +=
-                specular::run(self, &gbuffer, shadowing.as_ref(), vpls.as_ref(), &mut spec, progress);
-            stats.record(Pass::Specular, t);
-        }
-
-        let mut film = Film::new(w, h);
-        film.pixels.par_iter_mut().enumerate().for_each(|(i, p)| *p = direct[i] + indirect[i] + spec[i]);
-        // Last: a background build may have finished only during the frame.
-        stats.decisions.insert(
-            0,
-            FrameDecision::new(
-                Subject::Bvh,
-                Run::Skip,
-                format!(
-                    "reused: built once for the scene ({:.1} ms), which is unchanged",
-                    self.bvh_build_ms()
-                ),
-            )
-            .with_cache(Cache::Reused),
-        );
-        stats.time_ms.insert("total", ms(start));
-        let shadows = shadowing.map(|s| s.bufs).and_then(|b| {
-            if self.options.keep_buffers {
-                Some(b)
-            } else {
-                self.recycle(b);
-                None
-            }
-        });
-        let (gbuffer, pixel_rays) = if self.options.keep_buffers {
-            (Some(gbuffer), Some(self.pixel_rays.snapshot()))
-        } else {
-            self.recycle_gbuffer(gbuffer);
-            (None, None)
-        };
-        Frame { film, stats, shadows, gbuffer, pixel_rays }
-    }
-}
-
-pub(crate) fn ms(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 /// Runs `f` on every row of `buf` in parallel, each row with its own ray counts; the counts are

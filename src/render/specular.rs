@@ -228,7 +228,7 @@ fn reflect(d: Vec3, n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{FrameStats, Indirect, Options};
+    use crate::render::{Indirect, Options};
 
     /// The wavefront gives every pixel exactly the light of its own path traced alone, with
     /// the same rays: maps with SMeRTS at mirror hits, VPL maps with interleaving, and rays.
@@ -250,15 +250,12 @@ mod tests {
         rays.indirect_opts.vpl.paths = 8;
         for o in [hybrid, rays] {
             let r = Renderer::new(&s, o);
-            let mut stats = FrameStats::default();
             let (g, _) = r.visibility();
             let sh = (o.shadows != crate::render::Shadows::Rays).then(|| {
                 let mut direct = vec![Vec3::ZERO; g.len()];
-                let mut sh = r.shadowing(&g, &mut direct, None, &|| {}, &mut stats);
-                sh.trace(&r, &g, &mut direct, false);
-                sh
+                r.test_shadowing(&g, &mut direct, None, true)
             });
-            let v = r.vpls(&mut stats);
+            let v = r.test_vpls();
             let mut out = vec![Vec3::ZERO; g.len()];
             let c = run(&r, &g, sh.as_ref(), Some(&v), &mut out, &|| {});
             let (w, k) = (80, o.indirect_opts.interleave as usize);

@@ -8,15 +8,13 @@
 //!   they can differ only where the two coverage rules disagree (within a pixel of an edge)
 //!   or where two surfaces tie in depth.
 
-use std::time::Instant;
-
 use glam::{Vec3, Vec4};
 use hyrt_raster::{Affine, EMPTY_ID, RasterOptions, Rasterizer, Target, TriangleSource};
 use hyrt_tracer::{Hit, RayCounts, RayKind, RowRays};
 
 use rayon::prelude::*;
 
-use super::{FrameStats, Progress, Renderer, Visibility, cull::CLUSTER, par_rows};
+use super::{Pass, Progress, Renderer, Visibility, cull::CLUSTER, par_rows, runner::Runner};
 use crate::camera::CameraRays;
 
 /// Fills the G-buffer: per pixel the visible triangle, the distance along the pixel's camera
@@ -28,10 +26,10 @@ use crate::camera::CameraRays;
 /// With `defer` (raster visibility only), the pixels that need a primary ray get none here:
 /// they are left `None` and listed (in pixel order), for [`resolve_deferred`] to cast once the
 /// shading passes that need no ray are done (the BVH may still be building meanwhile).
-pub fn run(
+pub(crate) fn run(
     r: &Renderer,
     progress: Progress,
-    stats: &mut FrameStats,
+    run: &mut Runner,
     defer: bool,
 ) -> (Vec<Option<Hit>>, Vec<u32>) {
     let deferred = std::sync::Mutex::new(Vec::new());
@@ -39,7 +37,7 @@ pub fn run(
     let mut gbuffer = r.take_gbuffer(w as usize * h as usize);
     match r.options.visibility {
         Visibility::Rays => {
-            stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
+            run.stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
                 for (x, px) in row.iter_mut().enumerate() {
                     let before = *c;
                     *px = primary_ray(r, x as u32, y, c);
@@ -50,67 +48,64 @@ pub fn run(
         Visibility::Raster => {
             let mut scratch = r.raster.lock().unwrap_or_else(|e| e.into_inner());
             let RasterScratch { rasterizer, target, clusters } = &mut *scratch;
-            let t = Instant::now();
-            r.clusters.visible(&r.camera, r.raster_near, clusters);
-            stats.record(super::Pass::VisCull, t);
-
-            let t = Instant::now();
-            rasterizer.rasterize_from(&ClusterSource::new(r, clusters), w, h, &raster_options(), target);
-            stats.record(super::Pass::VisRaster, t);
-
-            let t = Instant::now();
-            stats.rays += par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
-                let ids = &target.id[y as usize * w as usize..][..row.len()];
-                let rivals = &target.rival[y as usize * w as usize..][..row.len()];
-                // Each pixel's camera ray on its triangle's plane, a row at a time (SIMD);
-                // EMPTY_ID is no triangle id, so those pixels stay `None`.
-                let parallel = r.tracer.hits_on_row(&row_rays(&r.camera, y), 0, ids, row) > 0;
-                // Pixels that need a ray: some ray runs (numerically) parallel to its
-                // triangle's plane (a sliver seen exactly edge-on; the rasterizer writes only
-                // ids below the triangle count or EMPTY_ID, so the miss count covers these);
-                // and some ray passes just outside the triangle that the z-buffer gave its
-                // pixel (the coverage rule and the ray test differ by a fraction of a pixel
-                // along edges), where its point on the plane lies off the mesh: past a concave
-                // crease, under the neighbouring face, which would shadow it from every light.
-                // Ask the BVH, and count the ray: the G-buffer is then the ray-cast one there.
-                // And some pixel sees a cut-out's hole (the z-buffer draws cut-outs solid): what
-                // lies behind is the ray's to find, as the reference's primary ray does.
-                let holes = !r.cutouts().is_empty();
-                let rays = row_rays(&r.camera, y);
-                // Asked only for pixels with a rival (the groups are made on first use).
-                let same_plane = |a: u32, b: u32| {
-                    let groups = r.plane_groups().0;
-                    groups.get(a as usize) == groups.get(b as usize)
-                };
-                for (x, ((px, &id), &rival)) in row.iter_mut().zip(ids).zip(rivals).enumerate() {
-                    // Two surfaces too close for the z-buffer's depths to order
-                    // (`hyrt_tracer::DEPTH_TIE`): the pixel's ray orders the pair as the
-                    // tracer orders any two hits (no traversal). Not needed for two triangles
-                    // of the very same plane (a duplicate), which nothing orders: both apply
-                    // the same tie rule (the face the camera's ray enters is the rasterizer's
-                    // front face; then the smaller id).
-                    if rival != EMPTY_ID
-                        && !same_plane(rival, id)
-                        && px.is_some_and(|h| h.bary.iter().all(|&b| b >= 0.0))
-                        && let Some(h) = r.tracer.nearer_hit(&rays.ray(x as u32), id, rival)
-                    {
-                        *px = Some(h);
-                    }
-                    let outside = px.is_some_and(|h| h.bary.iter().any(|&b| b < 0.0));
-                    let hole = holes && px.is_some_and(|h| !r.scene.solid_at(h.tri, h.bary));
-                    if outside || hole || (parallel && px.is_none() && id != EMPTY_ID) {
-                        if defer {
-                            *px = None;
-                            deferred.lock().unwrap_or_else(|e| e.into_inner()).push(y * w + x as u32);
-                            continue;
-                        }
-                        let before = *c;
-                        *px = primary_ray(r, x as u32, y, c);
-                        r.pixel_rays.add(y as usize * w as usize + x, &before, c);
-                    }
-                }
+            run.part(Pass::VisCull, |_| r.clusters.visible(&r.camera, r.raster_near, clusters));
+            run.part(Pass::VisRaster, |_| {
+                rasterizer.rasterize_from(&ClusterSource::new(r, clusters), w, h, &raster_options(), target)
             });
-            stats.record(super::Pass::VisResolve, t);
+            let rays = run.part(Pass::VisResolve, |_| {
+                par_rows(&mut gbuffer, w as usize, progress, |y, row, c| {
+                    let ids = &target.id[y as usize * w as usize..][..row.len()];
+                    let rivals = &target.rival[y as usize * w as usize..][..row.len()];
+                    // Each pixel's camera ray on its triangle's plane, a row at a time (SIMD);
+                    // EMPTY_ID is no triangle id, so those pixels stay `None`.
+                    let parallel = r.tracer.hits_on_row(&row_rays(&r.camera, y), 0, ids, row) > 0;
+                    // Pixels that need a ray: some ray runs (numerically) parallel to its
+                    // triangle's plane (a sliver seen exactly edge-on; the rasterizer writes only
+                    // ids below the triangle count or EMPTY_ID, so the miss count covers these);
+                    // and some ray passes just outside the triangle that the z-buffer gave its
+                    // pixel (the coverage rule and the ray test differ by a fraction of a pixel
+                    // along edges), where its point on the plane lies off the mesh: past a concave
+                    // crease, under the neighbouring face, which would shadow it from every light.
+                    // Ask the BVH, and count the ray: the G-buffer is then the ray-cast one there.
+                    // And some pixel sees a cut-out's hole (the z-buffer draws cut-outs solid): what
+                    // lies behind is the ray's to find, as the reference's primary ray does.
+                    let holes = !r.cutouts().is_empty();
+                    let rays = row_rays(&r.camera, y);
+                    // Asked only for pixels with a rival (the groups are made on first use).
+                    let same_plane = |a: u32, b: u32| {
+                        let groups = r.plane_groups().0;
+                        groups.get(a as usize) == groups.get(b as usize)
+                    };
+                    for (x, ((px, &id), &rival)) in row.iter_mut().zip(ids).zip(rivals).enumerate() {
+                        // Two surfaces too close for the z-buffer's depths to order
+                        // (`hyrt_tracer::DEPTH_TIE`): the pixel's ray orders the pair as the
+                        // tracer orders any two hits (no traversal). Not needed for two triangles
+                        // of the very same plane (a duplicate), which nothing orders: both apply
+                        // the same tie rule (the face the camera's ray enters is the rasterizer's
+                        // front face; then the smaller id).
+                        if rival != EMPTY_ID
+                            && !same_plane(rival, id)
+                            && px.is_some_and(|h| h.bary.iter().all(|&b| b >= 0.0))
+                            && let Some(h) = r.tracer.nearer_hit(&rays.ray(x as u32), id, rival)
+                        {
+                            *px = Some(h);
+                        }
+                        let outside = px.is_some_and(|h| h.bary.iter().any(|&b| b < 0.0));
+                        let hole = holes && px.is_some_and(|h| !r.scene.solid_at(h.tri, h.bary));
+                        if outside || hole || (parallel && px.is_none() && id != EMPTY_ID) {
+                            if defer {
+                                *px = None;
+                                deferred.lock().unwrap_or_else(|e| e.into_inner()).push(y * w + x as u32);
+                                continue;
+                            }
+                            let before = *c;
+                            *px = primary_ray(r, x as u32, y, c);
+                            r.pixel_rays.add(y as usize * w as usize + x, &before, c);
+                        }
+                    }
+                })
+            });
+            run.stats.rays += rays;
         }
     }
     let mut deferred = deferred.into_inner().unwrap_or_else(|e| e.into_inner());

@@ -18,24 +18,13 @@ const RAY_CHUNK: usize = 64;
 impl Shadowing<'_> {
     /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
     /// answer replaces the map's; the direct light of the pixels with such rays is computed
-    /// again into `direct`. With `check` (wrong-visibility count), also a plain shadow ray (no
-    /// hint) per (pixel, light) with a decision, not counted as a frame ray, checking every
-    /// decision: the map's, the hint's and the traversal's, counted apart. Completes
-    /// [`Shadowing::lights`], and with `Options::keep_buffers` the per-light buffers.
-    pub fn trace(
-        &mut self,
-        r: &Renderer,
-        gbuffer: &[Option<Hit>],
-        direct: &mut [Vec3],
-        check: bool,
-    ) -> RayCounts {
+    /// again into `direct`.
+    pub fn trace(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], direct: &mut [Vec3]) -> RayCounts {
         let n = gbuffer.len();
         let nl = self.maps.len();
-        let keep = r.options.keep_buffers;
         let cls = classifiers(&self.maps, self.planes, r);
         let b = &mut self.bufs;
         let stride = b.faces.stride;
-        b.by_hint.reset(n, nl);
         // The pixels with rays, in order, and their shading points.
         let w = r.scene.settings.width.max(1) as usize;
         let pixels: Vec<u32> = (0..n.div_ceil(w))
@@ -85,7 +74,7 @@ impl Shadowing<'_> {
             })
             .collect();
         let mut total = RayCounts::default();
-        let mut und_counts = vec![[0u64; 2]; nl];
+        let und_counts = &mut self.und_counts;
         for (chunk, (out, c)) in order.chunks(RAY_CHUNK).zip(answers) {
             for (&(l, k), (blocked, hinted)) in chunk.iter().zip(out) {
                 let (l, i) = (l as usize, pixels[k as usize] as usize);
@@ -116,8 +105,18 @@ impl Shadowing<'_> {
         for (&i, c) in pixels.iter().zip(colors) {
             direct[i as usize] = c;
         }
+        total
+    }
+
+    /// Completes [`Shadowing::lights`] once the map's decisions are final (after the border
+    /// rays, if any). With `check` (wrong-visibility count), also a plain shadow ray (no hint)
+    /// per (pixel, light) with a decision, not counted as a frame ray, checking every decision:
+    /// the map's, the hint's and the traversal's, counted apart. With `Options::keep_buffers`,
+    /// the per-light buffers.
+    pub fn finish(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], check: bool) {
+        let nl = self.maps.len();
         for (((st, m), u), a) in
-            self.lights.iter_mut().zip(&self.map_counts).zip(&und_counts).zip(&self.added)
+            self.lights.iter_mut().zip(&self.map_counts).zip(&self.und_counts).zip(&self.added)
         {
             // Undecided pairs: the map's border pairs (lit or shadowed by it), and those no map
             // decided (`add_ray_pixels`).
@@ -132,10 +131,9 @@ impl Shadowing<'_> {
         } else {
             self.bufs.wrong_bits.reset(0, nl);
         }
-        if keep {
+        if r.options.keep_buffers {
             self.expand(r, gbuffer, check);
         }
-        total
     }
 
     /// Checks every decision with a plain shadow ray (not counted as a frame ray): fills

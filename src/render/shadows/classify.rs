@@ -1,8 +1,6 @@
 //! The classify pass: 8x8 tile by tile, the shading points, every light's map decision, and
 //! the tile's direct light from those decisions (module docs of `shadows`).
 
-use std::time::Instant;
-
 use glam::Vec3;
 use hyrt_shadowmap::{
     classify::{Decision, Hull, Plane},
@@ -16,7 +14,7 @@ use super::map_cache::FrameMaps;
 use super::{BorderHint, LightStats, Shadowing, bit, sum_per_light};
 use crate::render::gather::ShadePoint;
 use crate::render::light::{PlaneSides, light_geometry_and_terms, on_viewer_side, reflect, seen_winding};
-use crate::render::{FrameStats, Pass, Progress, Renderer, SurfaceHit};
+use crate::render::{FrameStats, Progress, Renderer, SurfaceHit};
 
 /// One band of classify's outputs: direct light, and the face, lit and edge bits.
 type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
@@ -39,25 +37,34 @@ const H: usize = TILE / 2;
 const _: () = assert!(TILE * TILE <= 64);
 
 impl Renderer<'_> {
-    /// The map-build, classify and borders passes for the camera hits (module docs); the
-    /// classify pass also writes into `direct` the direct light of every camera hit, with the
-    /// map's decisions (the border rays correct the pixels they decide).
-    pub(crate) fn shadowing<'r>(
+    /// The map-build pass: the light maps the camera hits of `gbuffer` need, from the cache or
+    /// built; what was done per light goes to `stats`' decisions.
+    pub(crate) fn map_build(&self, gbuffer: &[Option<Hit>], stats: &mut FrameStats) -> FrameMaps {
+        let mut maps = self.light_maps(gbuffer);
+        stats.maps_built = maps.built;
+        stats.decisions.append(&mut maps.decisions);
+        maps
+    }
+
+    /// The classify pass (module docs) over the camera hits of `gbuffer` with the maps of the
+    /// map-build pass: per pixel and light the map's decision (`faces`, `lit` and `edge` bits of
+    /// the returned buffers), and into `direct` the direct light of every camera hit from those
+    /// decisions (the border rays correct the pixels they decide), and into `points` the diffuse
+    /// shading points.
+    pub(crate) fn classify<'r>(
         &'r self,
         gbuffer: &[Option<Hit>],
+        maps: FrameMaps,
         direct: &mut [Vec3],
         points: Option<&mut [ShadePoint]>,
         progress: Progress,
-        stats: &mut FrameStats,
     ) -> Shadowing<'r> {
         let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
         let n = w * h;
         let lights = &self.lights;
         let nl = lights.len();
         let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
-
-        let t = Instant::now();
-        let FrameMaps { maps, built, decisions, page_counts } = self.light_maps(gbuffer);
+        let FrameMaps { maps, page_counts, .. } = maps;
         let resolution: Vec<Resolution> = if self.paged_maps() {
             self.maps.needed.get().map_or_else(Vec::new, |n| n.resolution.clone())
         } else {
@@ -68,17 +75,17 @@ impl Renderer<'_> {
         let receiver = |s: &SurfaceHit| resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
         let level =
             |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0, |r| r.level_from(recv, t));
-        stats.record(Pass::MapBuild, t);
-        stats.maps_built = built;
-        stats.decisions.extend(decisions);
 
-        let t = Instant::now();
         let planes: &'r [Plane] = self.occluders().0;
         let cls = classifiers(&maps, planes, self);
         let (groups, shared) = self.plane_groups();
         bufs.faces.reset(n, nl);
         bufs.lit.reset(n, nl);
         bufs.edge.reset(n, nl);
+        bufs.by_hint.reset(n, nl);
+        // None until the borders pass (which runs with border rays alone) marks some.
+        bufs.und.reset(n, nl);
+        bufs.border.clear();
         let stride = bufs.faces.stride;
         let band = (TILE * w).max(1);
         let bands = direct
@@ -248,11 +255,6 @@ impl Renderer<'_> {
         let hints =
             (0..nl).map(|l| bands.iter().flat_map(|b| b.hints[l].iter().copied()).collect()).collect();
         let map_counts = sum_per_light(bands.into_iter().map(|b| b.counts).collect(), nl);
-        stats.record(Pass::Classify, t);
-
-        let t = Instant::now();
-        self.borders(&mut bufs, w, h);
-        stats.record(Pass::Borders, t);
 
         let needed = self.maps.needed.get();
         let lights = maps
@@ -273,7 +275,7 @@ impl Renderer<'_> {
                 ..LightStats::default()
             })
             .collect();
-        let added = vec![0; nl];
-        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, hints }
+        let (added, und_counts) = (vec![0; nl], vec![[0; 2]; nl]);
+        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, und_counts, hints }
     }
 }

@@ -2,7 +2,6 @@
 //! a view needs, within the memory budget; dropped when their light or options change.
 
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
 
 use glam::Vec3;
 use hyrt_shadowmap::{LightMap, MapKind, PageKey, map::Holes};
@@ -10,6 +9,7 @@ use hyrt_tracer::Hit;
 use rayon::prelude::*;
 
 use super::{ShadowBuffers, lookup::sees_hole, marking::Needs};
+use crate::render::runner::timed;
 use crate::render::{Cache, CutoutMaps, FrameDecision, LightMaps, Renderer, Run, Subject};
 
 /// Per-renderer state of map-based shadows: the light maps and the per-pixel buffers, recycled
@@ -40,7 +40,7 @@ struct PageJob {
 }
 
 /// What the map-build pass made for a frame.
-pub(super) struct FrameMaps {
+pub(crate) struct FrameMaps {
     /// Per light, its map.
     pub(super) maps: Vec<Arc<LightMap>>,
     /// Maps built or extended.
@@ -185,31 +185,32 @@ impl Renderer<'_> {
             } else {
                 format!("map reused from an earlier frame, not rebuilt ({wanted} of {nf} faces)")
             };
-            let t = Instant::now();
             if missing {
                 // Only the faces not drawn yet (a moved camera's new ones), merged into the map.
                 let faces: Vec<bool> = match &have {
                     Some(h) => want.iter().zip(h).map(|(w, h)| *w && !*h).collect(),
                     None => want.to_vec(),
                 };
-                let map = LightMap::build_grouped(
-                    &self.scene.positions,
-                    light.position,
-                    &self.options.shadow.map,
-                    &faces,
-                    self.plane_groups().0,
-                );
-                match &mut cache[l] {
-                    Some(old) => Arc::make_mut(old).merge(map),
-                    slot => *slot = Some(Arc::new(map)),
-                }
+                let ((), ms) = timed(|| {
+                    let map = LightMap::build_grouped(
+                        &self.scene.positions,
+                        light.position,
+                        &self.options.shadow.map,
+                        &faces,
+                        self.plane_groups().0,
+                    );
+                    match &mut cache[l] {
+                        Some(old) => Arc::make_mut(old).merge(map),
+                        slot => *slot = Some(Arc::new(map)),
+                    }
+                });
                 built += 1;
                 let done = if have.as_ref().is_some_and(|h| h.iter().any(|&d| d)) {
                     Cache::Extended
                 } else {
                     Cache::Built
                 };
-                let reason = format!("{reason} in {:.1} ms", crate::render::ms(t));
+                let reason = format!("{reason} in {ms:.1} ms");
                 decisions.push(FrameDecision::new(what, Run::Run, reason).with_cache(done));
             } else {
                 decisions.push(FrameDecision::new(what, Run::Run, reason).with_cache(Cache::Reused));
@@ -226,21 +227,22 @@ impl Renderer<'_> {
                 chunk
                     .par_iter()
                     .map(|job| {
-                        let t = Instant::now();
                         let light = lights[job.light].position;
                         // Cut-outs: each texel's centre decides whether it sees a hole.
                         let hole = |id: u32, dir: Vec3| sees_hole(self.scene, light, id, dir);
                         let holes = Holes { cutouts: self.cutouts(), solid: &[], hole: &hole };
-                        let map = LightMap::build_pages_with_holes(
-                            &self.scene.positions,
-                            light,
-                            &self.options.shadow.map,
-                            &job.draw,
-                            groups,
-                            (!self.cutouts().is_empty() && self.options.shadow.cutouts == CutoutMaps::Texels)
-                                .then_some(&holes),
-                        );
-                        (map, crate::render::ms(t))
+                        timed(|| {
+                            LightMap::build_pages_with_holes(
+                                &self.scene.positions,
+                                light,
+                                &self.options.shadow.map,
+                                &job.draw,
+                                groups,
+                                (!self.cutouts().is_empty()
+                                    && self.options.shadow.cutouts == CutoutMaps::Texels)
+                                    .then_some(&holes),
+                            )
+                        })
                     })
                     .collect::<Vec<_>>()
             })

@@ -202,6 +202,8 @@ pub struct Shadowing<'r> {
     map_counts: Vec<[u64; 4]>,
     /// Per light, the pairs of [`Shadowing::add_ray_pixels`] (rays alone decide them).
     added: Vec<u64>,
+    /// Per light, the pairs the border rays decided, and how many of those the map had lit.
+    und_counts: Vec<[u64; 2]>,
     /// Per light, the pixels of the map-space borders (in pixel order) and their occluder
     /// hints ([`Lookup::hint`]), as the classify pass found them: a border ray tests that
     /// triangle first without looking the point up again.

@@ -3,10 +3,7 @@
 
 mod common;
 
-use hyrt::render::{
-    Indirect, Options, Renderer,
-    shadows::{RAY_HINT, RAY_NONE, RAY_TRAVERSAL},
-};
+use hyrt::render::{Indirect, Options, Renderer, shadows::BorderRay};
 use hyrt_tracer::RayCounts;
 
 fn scene(max_depth: u32) -> hyrt::scene::Scene {
@@ -71,16 +68,16 @@ fn shadow_ray_outcomes_and_borders_match_the_stats() {
         let (mut hints, mut traversals) = (0, 0);
         for (l, st) in f.stats.lights.iter().enumerate() {
             let rays = &b.ray[l];
-            let cast = rays.iter().filter(|&&k| k != RAY_NONE).count() as u64;
+            let cast = rays.iter().filter(|&&k| k != BorderRay::None).count() as u64;
             assert_eq!(cast, st.undecided, "light {l}");
             for (i, &k) in rays.iter().enumerate() {
                 assert_eq!(
-                    k != RAY_NONE,
+                    k != BorderRay::None,
                     b.undecided[l][i] && b.occ[l][i] != hyrt_shadowmap::classify::Decision::NotNeeded
                 );
             }
             for (i, &k) in rays.iter().enumerate() {
-                if k == RAY_HINT && b.map_border[l][i] {
+                if k == BorderRay::Hint && b.map_border[l][i] {
                     assert_ne!(
                         b.hint[l][i],
                         hyrt_shadowmap::EMPTY,
@@ -88,8 +85,8 @@ fn shadow_ray_outcomes_and_borders_match_the_stats() {
                     );
                 }
             }
-            hints += rays.iter().filter(|&&k| k == RAY_HINT).count() as u64;
-            traversals += rays.iter().filter(|&&k| k == RAY_TRAVERSAL).count() as u64;
+            hints += rays.iter().filter(|&&k| k == BorderRay::Hint).count() as u64;
+            traversals += rays.iter().filter(|&&k| k == BorderRay::Traversal).count() as u64;
             let border = &b.border[l];
             assert!(border.iter().zip(&b.undecided[l]).all(|(b, u)| !b || *u), "light {l}");
             if dilate == 0 {

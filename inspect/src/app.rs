@@ -12,10 +12,7 @@ use eframe::egui::{
 use glam::Vec3 as V3;
 use hyrt::options::{Choice, Indirect, IndirectOptions, LightMaps, Options, Shadows};
 use hyrt::render::{Cache, FrameStats, Subject};
-use hyrt::render::{
-    Pass,
-    shadows::{RAY_HINT, RAY_TRAVERSAL},
-};
+use hyrt::render::{Pass, shadows::BorderRay};
 use hyrt_shadowmap::{LightMap, MapKind};
 use hyrt_tracer::RayCounts;
 
@@ -959,8 +956,8 @@ impl Inspector {
                     ));
                 }
                 let ray = match lp.ray {
-                    RAY_HINT => "ray cast: blocked by the hint (no traversal)".to_string(),
-                    RAY_TRAVERSAL => format!(
+                    BorderRay::Hint => "ray cast: blocked by the hint (no traversal)".to_string(),
+                    BorderRay::Traversal => format!(
                         "ray cast: traversal, {}",
                         if lp.decision == Some(hyrt_shadowmap::classify::Decision::Shadow) {
                             "blocked"
@@ -1198,7 +1195,7 @@ impl Inspector {
         };
         ui.label(format!(
             "light {l}: {} map, {layout}, {} of {} faces drawn (those camera hits fall on), {:.1} MB",
-            kind_name(map.kind()),
+            MapKind::name(map.kind()),
             map.faces_drawn().iter().filter(|&&d| d).count(),
             map.faces(),
             map.memory_bytes() as f64 / 1048576.0
@@ -1786,13 +1783,6 @@ fn wrong_text(r: &Rendered) -> String {
 
 fn vec3(v: glam::Vec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z)
-}
-
-fn kind_name(k: MapKind) -> &'static str {
-    match k {
-        MapKind::Cube => "cube",
-        MapKind::Paraboloid => "dual-paraboloid",
-    }
 }
 
 fn face_name(r: &Rendered, l: usize, face: u8) -> String {

@@ -4,7 +4,7 @@ use glam::Vec3;
 use hyrt::render::{
     Shadows, SurfaceHit,
     light::facing,
-    shadows::{RAY_NONE, resolution_guide},
+    shadows::{BorderRay, resolution_guide},
 };
 use hyrt_shadowmap::{
     EMPTY,
@@ -65,8 +65,8 @@ pub struct LightPick {
     /// Border before dilation, and undecided (border after dilation: a ray was cast).
     pub border: bool,
     pub undecided: bool,
-    /// `RAY_NONE`, `RAY_HINT` or `RAY_TRAVERSAL`.
-    pub ray: u8,
+    /// What its shadow ray did.
+    pub ray: BorderRay,
     /// With the visibility check: whether a ray contradicts the map's decision.
     pub wrong: Option<bool>,
 }
@@ -167,7 +167,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
                 decision: bufs.and_then(|b| b.occ.get(l)).map(|o| o[i]),
                 border: bufs.is_some_and(|b| at(&b.border)),
                 undecided: bufs.is_some_and(|b| at(&b.undecided)),
-                ray: bufs.and_then(|b| b.ray.get(l)).map_or(RAY_NONE, |v| v[i]),
+                ray: bufs.and_then(|b| b.ray.get(l)).map_or(BorderRay::None, |v| v[i]),
                 wrong: bufs.filter(|b| !b.wrong.is_empty()).map(|b| at(&b.wrong)),
             }
         })

@@ -16,7 +16,7 @@ use hyrt::{
     camera::CameraRays,
     film::{Film, display},
     metrics::luminance,
-    render::shadows::{RAY_HINT, RAY_NONE, RAY_TRAVERSAL},
+    render::shadows::BorderRay,
 };
 use hyrt_shadowmap::{
     LightMap,
@@ -131,13 +131,20 @@ pub fn mask_image_in(mask: &[bool], backdrop: &[u8], width: u32, height: u32, co
 
 /// Where a light's selective shadow rays went: answered by the occluder hint (one triangle test),
 /// or traversing the BVH and then blocked or reaching the light; the backdrop elsewhere.
-pub fn ray_image(ray: &[u8], occ: &[Decision], backdrop: &[u8], width: u32, height: u32) -> ColorImage {
-    let pixels = backdrop.iter().enumerate().map(|(i, &b)| match ray.get(i).copied().unwrap_or(RAY_NONE) {
-        RAY_HINT => HINT_COLOR,
-        RAY_TRAVERSAL if occ.get(i) == Some(&Decision::Shadow) => TRAVERSAL_BLOCKED_COLOR,
-        RAY_TRAVERSAL => TRAVERSAL_CLEAR_COLOR,
-        _ => gray(b),
-    });
+pub fn ray_image(
+    ray: &[BorderRay],
+    occ: &[Decision],
+    backdrop: &[u8],
+    width: u32,
+    height: u32,
+) -> ColorImage {
+    let pixels =
+        backdrop.iter().enumerate().map(|(i, &b)| match ray.get(i).copied().unwrap_or(BorderRay::None) {
+            BorderRay::Hint => HINT_COLOR,
+            BorderRay::Traversal if occ.get(i) == Some(&Decision::Shadow) => TRAVERSAL_BLOCKED_COLOR,
+            BorderRay::Traversal => TRAVERSAL_CLEAR_COLOR,
+            _ => gray(b),
+        });
     ColorImage::new([width as usize, height as usize], pixels.collect())
 }
 
@@ -452,7 +459,13 @@ mod tests {
         assert_eq!(m.pixels, vec![gray(90), WRONG_COLOR]);
         use Decision::{Lit as LIT, Shadow as SHADOW};
         let occ = [SHADOW, LIT, SHADOW, LIT];
-        let r = ray_image(&[RAY_HINT, RAY_TRAVERSAL, RAY_TRAVERSAL, RAY_NONE], &occ, &back, 4, 1);
+        let r = ray_image(
+            &[BorderRay::Hint, BorderRay::Traversal, BorderRay::Traversal, BorderRay::None],
+            &occ,
+            &back,
+            4,
+            1,
+        );
         assert_eq!(r.pixels, vec![HINT_COLOR, TRAVERSAL_CLEAR_COLOR, TRAVERSAL_BLOCKED_COLOR, gray(90)]);
         // Without kept ray outcomes: the backdrop alone.
         assert_eq!(ray_image(&[], &occ, &back, 4, 1).pixels[0], gray(90));

@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use hyrt::render::{Indirect, Options, shadows::RAY_NONE};
+use hyrt::render::{Indirect, Options, shadows::BorderRay};
 use hyrt_inspect::{
     Setup, navigate, pick,
     worker::{Command, Comparison, Loaded, Pose, Render, Rendered, Reply, Worker},
@@ -199,10 +199,10 @@ fn picking_agrees_with_the_frame_buffers() {
                 assert_eq!(m.face, m.lookup.face);
                 assert_eq!([m.x as u32, m.y as u32], m.lookup.texel);
                 if lp.undecided {
-                    assert_ne!(lp.ray, RAY_NONE);
+                    assert_ne!(lp.ray, BorderRay::None);
                     rays += 1;
                 } else {
-                    assert_eq!(lp.ray, RAY_NONE);
+                    assert_eq!(lp.ray, BorderRay::None);
                     assert_eq!(m.lookup.decision, b.occ[l][i], "({x}, {y}) light {l}");
                     decided += 1;
                 }

@@ -72,10 +72,7 @@ impl Plan {
             plan.skip(Pass::Direct, "the scene has no point lights".into());
         } else {
             let sh = &opts.shadow;
-            let kind = match sh.map.kind {
-                hyrt_shadowmap::MapKind::Cube => "cube",
-                hyrt_shadowmap::MapKind::Paraboloid => "dual-paraboloid",
-            };
+            let kind = sh.map.kind.name();
             let paged = sh.light_maps == crate::options::LightMaps::Paged
                 && sh.map.kind == hyrt_shadowmap::MapKind::Cube;
             let maps = if paged {

@@ -7,7 +7,7 @@ use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
 use super::lookup::{classifiers, hint, lookup};
-use super::{LightBits, RAY_HINT, RAY_NONE, RAY_TRAVERSAL, Shadowing, bit, per_light, sum_per_light};
+use super::{BorderRay, LightBits, Shadowing, WrongCounts, bit, per_light, sum_per_light};
 use crate::render::light::{light_geometry, reflect};
 use crate::render::{Renderer, Shadows, SurfaceHit};
 
@@ -79,8 +79,8 @@ impl Shadowing<'_> {
             for (&(l, k), (blocked, hinted)) in chunk.iter().zip(out) {
                 let (l, i) = (l as usize, pixels[k as usize] as usize);
                 let (byte, m) = (i * stride + l / 8, 1u8 << (l % 8));
-                und_counts[l][0] += 1;
-                und_counts[l][1] += u64::from(b.lit.bits[byte] & m != 0);
+                und_counts[l].rays += 1;
+                und_counts[l].map_lit += u64::from(b.lit.bits[byte] & m != 0);
                 if blocked {
                     b.lit.bits[byte] &= !m;
                 } else {
@@ -120,11 +120,11 @@ impl Shadowing<'_> {
         {
             // Undecided pairs: the map's border pairs (lit or shadowed by it), and those no map
             // decided (`add_ray_pixels`).
-            st.undecided = u[0];
-            st.lit = m[0] - u[1];
-            st.shadowed = m[1] - (u[0] - u[1] - a);
-            st.by_tile = m[2];
-            st.by_suspects = m[3];
+            st.undecided = u.rays;
+            st.lit = m.lit - u.map_lit;
+            st.shadowed = m.shadowed - (u.rays - u.map_lit - a);
+            st.by_tile = m.by_tile;
+            st.by_suspects = m.by_suspects;
         }
         if check {
             self.check(r, gbuffer);
@@ -147,13 +147,13 @@ impl Shadowing<'_> {
         let stride = b.faces.stride;
         let (faces, lit, und, by_hint) = (&b.faces, &b.lit, &b.und, &b.by_hint);
         // Per row: per light, wrong decisions by [map, hint, traversal].
-        let rows: Vec<Vec<[u64; 3]>> = b
+        let rows: Vec<Vec<WrongCounts>> = b
             .wrong_bits
             .bits
             .par_chunks_mut((w * stride).max(1))
             .enumerate()
             .map(|(y, wrong)| {
-                let mut by = vec![[0u64; 3]; nl];
+                let mut by = vec![WrongCounts::default(); nl];
                 for x in 0..wrong.len() / stride {
                     let i = y * w + x;
                     if !faces.any(i) {
@@ -168,14 +168,14 @@ impl Shadowing<'_> {
                         let truth = r.tracer.occluded(&ray, RayKind::Shadow, &mut RayCounts::default());
                         if truth == lit.get(i, l) {
                             wrong[x * stride + l / 8] |= 1 << (l % 8);
-                            let k = if !und.get(i, l) {
-                                0
+                            let by = &mut by[l];
+                            if !und.get(i, l) {
+                                by.map += 1;
                             } else if by_hint.get(i, l) {
-                                1
+                                by.hint += 1;
                             } else {
-                                2
-                            };
-                            by[l][k] += 1;
+                                by.traversal += 1;
+                            }
                         }
                     }
                 }
@@ -183,7 +183,7 @@ impl Shadowing<'_> {
             })
             .collect();
         for (st, by) in self.lights.iter_mut().zip(sum_per_light(rows, nl)) {
-            (st.wrong, st.wrong_hint, st.wrong_traversal) = (Some(by[0]), Some(by[1]), Some(by[2]));
+            (st.wrong, st.wrong_hint, st.wrong_traversal) = (Some(by.map), Some(by.hint), Some(by.traversal));
         }
     }
 
@@ -205,9 +205,9 @@ impl Shadowing<'_> {
         let map_border = flags(&b.edge);
         let wrong = if check { flags(&b.wrong_bits) } else { Vec::new() };
         let ray = per_light(nl, n, |i, l| match (b.und.get(i, l), b.by_hint.get(i, l)) {
-            (false, _) => RAY_NONE,
-            (true, true) => RAY_HINT,
-            (true, false) => RAY_TRAVERSAL,
+            (false, _) => BorderRay::None,
+            (true, true) => BorderRay::Hint,
+            (true, false) => BorderRay::Traversal,
         });
         let hint = per_light(nl, n, |i, l| {
             if !b.faces.get(i, l) {

@@ -11,19 +11,24 @@ use rayon::prelude::*;
 
 use super::lookup::{classifiers, settle};
 use super::map_cache::FrameMaps;
-use super::{BorderHint, LightStats, Shadowing, bit, sum_per_light};
+use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, bit, sum_per_light};
 use crate::render::gather::ShadePoint;
 use crate::render::light::{PlaneSides, light_geometry_and_terms, on_viewer_side, reflect, seen_winding};
 use crate::render::{FrameStats, Progress, Renderer, SurfaceHit};
 
-/// One band of classify's outputs: direct light, and the face, lit and edge bits.
-type Band<'a> = (((&'a mut [Vec3], &'a mut [u8]), &'a mut [u8]), &'a mut [u8]);
+/// One band of rows of classify's outputs: the direct light, and the face, lit and edge bits.
+struct Band<'a> {
+    direct: &'a mut [Vec3],
+    faces: &'a mut [u8],
+    lit: &'a mut [u8],
+    edge: &'a mut [u8],
+}
 
 /// What one band of rows of the classify pass found: per light, its map decisions (lit,
 /// shadowed, and how many of those per tile and by their ambiguous triangles) and its
 /// map-space borders, in pixel order.
 struct BandOut {
-    counts: Vec<[u64; 4]>,
+    counts: Vec<MapCounts>,
     hints: Vec<Vec<BorderHint>>,
 }
 
@@ -92,11 +97,13 @@ impl Renderer<'_> {
             .par_chunks_mut(band)
             .zip(bufs.faces.bits.par_chunks_mut(band * stride))
             .zip(bufs.lit.bits.par_chunks_mut(band * stride))
-            .zip(bufs.edge.bits.par_chunks_mut(band * stride));
-        let band_fn = |b: usize, (((out, faces), lit), edge): Band, mut pts: Option<&mut [ShadePoint]>| {
+            .zip(bufs.edge.bits.par_chunks_mut(band * stride))
+            .map(|(((direct, faces), lit), edge)| Band { direct, faces, lit, edge });
+        let band_fn = |b: usize, band_bufs: Band, mut pts: Option<&mut [ShadePoint]>| {
+            let Band { direct: out, faces, lit, edge } = band_bufs;
             let first = b * band;
             let rows = out.len() / w.max(1);
-            let mut counts = vec![[0u64; 4]; nl];
+            let mut counts = vec![MapCounts::default(); nl];
             // Per light, the band's map-space borders and their occluder hints.
             let mut hints: Vec<Vec<BorderHint>> = vec![Vec::new(); nl];
             // Per tile: the shading points and the lights they face, then per light every
@@ -181,14 +188,14 @@ impl Renderer<'_> {
                     let decide_all = |hull: Hull,
                                       points: &mut dyn Iterator<Item = usize>,
                                       lit: &mut [u8],
-                                      counts: &mut [u64; 4]| {
+                                      counts: &mut MapCounts| {
                         let lit_all = hull == Hull::Lit;
                         for k in points {
                             let j = tile[k].0;
                             if faces[j * stride + byte] & bit != 0 {
                                 lit[j * stride + byte] |= if lit_all { bit } else { 0 };
-                                counts[usize::from(!lit_all)] += 1;
-                                counts[2] += 1;
+                                counts.decided(lit_all);
+                                counts.by_tile += 1;
                             }
                         }
                     };
@@ -225,8 +232,8 @@ impl Renderer<'_> {
                         if is_lit {
                             lit[j * stride + byte] |= bit;
                         }
-                        counts[l][usize::from(!is_lit)] += 1;
-                        counts[l][3] += u64::from(settled.is_some());
+                        counts[l].decided(is_lit);
+                        counts[l].by_suspects += u64::from(settled.is_some());
                         if lk.map_border && settled.is_none() {
                             edge[j * stride + byte] |= bit;
                             hints[l].push(BorderHint { pixel: (first + j) as u32, hint: lk.hint });
@@ -275,7 +282,7 @@ impl Renderer<'_> {
                 ..LightStats::default()
             })
             .collect();
-        let (added, und_counts) = (vec![0; nl], vec![[0; 2]; nl]);
+        let (added, und_counts) = (vec![0; nl], vec![RayCounted::default(); nl]);
         Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, und_counts, hints }
     }
 }

@@ -164,10 +164,9 @@ pub struct ShadowBuffers {
     pub wrong: Vec<Vec<bool>>,
     /// The border before dilation (pixels with a decision only; with the pixels whose camera
     /// hit came after the map passes, all of whose lights rays decide), and what each undecided
-    /// pixel's shadow ray did: [`RAY_NONE`], [`RAY_HINT`] (its occluder hint blocked it: no
-    /// traversal) or [`RAY_TRAVERSAL`].
+    /// pixel's shadow ray did: a [`BorderRay`].
     pub border: Vec<Vec<bool>>,
-    pub ray: Vec<Vec<u8>>,
+    pub ray: Vec<Vec<BorderRay>>,
     /// Lights that face each pixel's shading point ([`facing`]): those with a decision.
     pub(crate) faces: LightBits,
     /// The decision, lit or not: the map's, then the border rays'.
@@ -182,12 +181,17 @@ pub struct ShadowBuffers {
     wrong_bits: LightBits,
 }
 
-/// [`ShadowBuffers::ray`]: no shadow ray for this pixel and light.
-pub const RAY_NONE: u8 = 0;
-/// [`ShadowBuffers::ray`]: a shadow ray answered by the map's occluder hint.
-pub const RAY_HINT: u8 = 1;
-/// [`ShadowBuffers::ray`]: a shadow ray that traversed the BVH.
-pub const RAY_TRAVERSAL: u8 = 2;
+/// What a (pixel, light) pair's shadow ray did ([`ShadowBuffers::ray`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BorderRay {
+    /// No shadow ray: the map decided.
+    #[default]
+    None,
+    /// A shadow ray answered by the map's occluder hint (no traversal).
+    Hint,
+    /// A shadow ray that traversed the BVH.
+    Traversal,
+}
 
 /// One frame's map-based shadows: the maps used and the per-pixel buffers.
 pub struct Shadowing<'r> {
@@ -197,13 +201,12 @@ pub struct Shadowing<'r> {
     planes: &'r [Plane],
     /// Paged maps: per light, how a point picks its level (empty for whole maps).
     resolution: Vec<Resolution>,
-    /// Per light, the map's lit and shadowed decisions (before the border rays), and how many
-    /// of them were made per tile, and by their ambiguous triangles ([`settle`]).
-    map_counts: Vec<[u64; 4]>,
+    /// Per light, the map's decisions (before the border rays).
+    map_counts: Vec<MapCounts>,
     /// Per light, the pairs of [`Shadowing::add_ray_pixels`] (rays alone decide them).
     added: Vec<u64>,
-    /// Per light, the pairs the border rays decided, and how many of those the map had lit.
-    und_counts: Vec<[u64; 2]>,
+    /// Per light, the pairs the border rays decided.
+    und_counts: Vec<RayCounted>,
     /// Per light, the pixels of the map-space borders (in pixel order) and their occluder
     /// hints ([`Lookup::hint`]), as the classify pass found them: a border ray tests that
     /// triangle first without looking the point up again.
@@ -283,12 +286,67 @@ fn per_light<T: Send>(lights: usize, n: usize, f: impl Fn(usize, usize) -> T + S
 }
 
 /// Per-light counts of parts (bands, rows) summed in order, for `lights` lights.
-fn sum_per_light<const K: usize>(parts: Vec<Vec<[u64; K]>>, lights: usize) -> Vec<[u64; K]> {
-    let mut sum = vec![[0u64; K]; lights];
+fn sum_per_light<T: Copy + Default + std::ops::AddAssign>(parts: Vec<Vec<T>>, lights: usize) -> Vec<T> {
+    let mut sum = vec![T::default(); lights];
     for part in parts {
         for (a, b) in sum.iter_mut().zip(part) {
-            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+            *a += b;
         }
     }
     sum
+}
+
+/// One light's map decisions in a frame, before the border rays.
+#[derive(Clone, Copy, Debug, Default)]
+struct MapCounts {
+    lit: u64,
+    shadowed: u64,
+    /// Of those, the decisions made for a whole tile at once (`Classifier::hull`).
+    by_tile: u64,
+    /// Of those, the decisions settled by their ambiguous triangles (`lookup::settle`).
+    by_suspects: u64,
+}
+
+impl MapCounts {
+    /// Counts one decision, lit or not.
+    #[inline]
+    fn decided(&mut self, lit: bool) {
+        if lit {
+            self.lit += 1;
+        } else {
+            self.shadowed += 1;
+        }
+    }
+}
+
+impl std::ops::AddAssign for MapCounts {
+    fn add_assign(&mut self, o: Self) {
+        self.lit += o.lit;
+        self.shadowed += o.shadowed;
+        self.by_tile += o.by_tile;
+        self.by_suspects += o.by_suspects;
+    }
+}
+
+/// One light's pairs decided by border rays: how many, and of those how many the map had lit.
+#[derive(Clone, Copy, Debug, Default)]
+struct RayCounted {
+    rays: u64,
+    map_lit: u64,
+}
+
+/// One light's decisions that a plain shadow ray contradicts, by who made them.
+#[derive(Clone, Copy, Debug, Default)]
+struct WrongCounts {
+    map: u64,
+    hint: u64,
+    traversal: u64,
+}
+
+impl std::ops::AddAssign for WrongCounts {
+    fn add_assign(&mut self, o: Self) {
+        self.map += o.map;
+        self.hint += o.hint;
+        self.traversal += o.traversal;
+    }
 }

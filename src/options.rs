@@ -399,6 +399,9 @@ pub struct Knob {
     pub get: fn(&Options) -> Value,
     /// Sets the knob from a value that [`Knob::values`] accepts; the message says why not.
     pub set: fn(&mut Options, &str) -> Result<(), String>,
+    /// The range an interactive slider offers (within [`Knob::values`]; the inspector's),
+    /// for numeric knobs.
+    pub slider: Option<(f64, f64)>,
 }
 
 impl Knob {
@@ -452,7 +455,13 @@ fn number(x: f32) -> Value {
 
 /// One [`Knob`] entry: `knob!(NAME, VALUE_NAME, HELP, KIND, field.path)`.
 macro_rules! knob {
-    ($name:literal, $vn:literal, $help:literal, choice $t:ty, $($f:ident).+) => {
+    (@slider) => {
+        None
+    };
+    (@slider $lo:literal, $hi:literal) => {
+        Some(($lo as f64, $hi as f64))
+    };
+    ($name:literal, $vn:literal, $help:literal, choice $t:ty, $($f:ident).+ $(, slider $lo:literal ..= $hi:literal)?) => {
         Knob {
             name: $name,
             value_name: $vn,
@@ -463,9 +472,10 @@ macro_rules! knob {
                 o.$($f).+ = choice::<$t>($name, v)?;
                 Ok(())
             },
+            slider: knob!(@slider $($lo, $hi)?),
         }
     };
-    ($name:literal, $vn:literal, $help:literal, count $min:literal ..= $max:literal, $($f:ident).+) => {
+    ($name:literal, $vn:literal, $help:literal, count $min:literal ..= $max:literal, $($f:ident).+ $(, slider $lo:literal ..= $hi:literal)?) => {
         Knob {
             name: $name,
             value_name: $vn,
@@ -476,9 +486,10 @@ macro_rules! knob {
                 o.$($f).+ = count($name, v, $min, $max)?;
                 Ok(())
             },
+            slider: knob!(@slider $($lo, $hi)?),
         }
     };
-    ($name:literal, $vn:literal, $help:literal, non_negative, $($f:ident).+) => {
+    ($name:literal, $vn:literal, $help:literal, non_negative, $($f:ident).+ $(, slider $lo:literal ..= $hi:literal)?) => {
         Knob {
             name: $name,
             value_name: $vn,
@@ -489,9 +500,10 @@ macro_rules! knob {
                 o.$($f).+ = non_negative($name, v)?;
                 Ok(())
             },
+            slider: knob!(@slider $($lo, $hi)?),
         }
     };
-    ($name:literal, $vn:literal, $help:literal, positive_or_inf, $($f:ident).+) => {
+    ($name:literal, $vn:literal, $help:literal, positive_or_inf, $($f:ident).+ $(, slider $lo:literal ..= $hi:literal)?) => {
         Knob {
             name: $name,
             value_name: $vn,
@@ -502,6 +514,7 @@ macro_rules! knob {
                 o.$($f).+ = positive_or_inf($name, v)?;
                 Ok(())
             },
+            slider: knob!(@slider $($lo, $hi)?),
         }
     };
 }
@@ -542,16 +555,16 @@ pub const KNOBS: &[Knob] = &[
         "D",
         "Paged light maps: texels per pixel footprint (per side) that each receiver asks for.",
         non_negative,
-        shadow.map_detail
+        shadow.map_detail, slider 0.25..=4.0
     ),
     knob!(
         "map-budget",
         "MB",
         "Paged light maps: most megabytes of pages per light (coarser levels beyond it).",
         count 1..=65536,
-        shadow.map_budget
+        shadow.map_budget, slider 1..=256
     ),
-    knob!("bias", "B", "Depth margin of map decisions, in texel footprints.", non_negative, shadow.bias),
+    knob!("bias", "B", "Depth margin of map decisions, in texel footprints.", non_negative, shadow.bias, slider 0.0..=4.0),
     knob!(
         "borders",
         "METHOD",
@@ -559,13 +572,13 @@ pub const KNOBS: &[Knob] = &[
         choice Borders,
         shadow.borders
     ),
-    knob!("dilate", "R", "SMeRTS border dilation radius, in pixels.", count 0..=4294967295, shadow.dilate),
+    knob!("dilate", "R", "SMeRTS border dilation radius, in pixels.", count 0..=4294967295, shadow.dilate, slider 0..=4),
     knob!(
         "tess",
         "T",
         "Paraboloid maps: tessellate triangles until projected edges are at most T texels (`inf`: no tessellation).",
         positive_or_inf,
-        shadow.map.tess_texels
+        shadow.map.tess_texels, slider 1.0..=64.0
     ),
     knob!(
         "ambiguous",
@@ -595,29 +608,29 @@ pub const KNOBS: &[Knob] = &[
         choice Indirect,
         indirect
     ),
-    knob!("vpls", "N", "Number of VPL light paths (thesis: 45), over all lights.", count 0..=4294967295, indirect_opts.vpl.paths),
-    knob!("vpl-bounces", "B", "Diffuse bounces per VPL path (each leaves a VPL).", count 0..=4294967295, indirect_opts.vpl.bounces),
+    knob!("vpls", "N", "Number of VPL light paths (thesis: 45), over all lights.", count 0..=4294967295, indirect_opts.vpl.paths, slider 0..=256),
+    knob!("vpl-bounces", "B", "Diffuse bounces per VPL path (each leaves a VPL).", count 0..=4294967295, indirect_opts.vpl.bounces, slider 1..=4),
     knob!("vpl-seed", "S", "Offset into the VPLs' Halton sequence.", count 0..=4294967295, indirect_opts.vpl.seed),
     knob!(
         "vpl-clamp",
         "F",
         "VPL distance clamp `d_min`, as a fraction of the scene's bounding-box diagonal.",
         non_negative,
-        indirect_opts.clamp
+        indirect_opts.clamp, slider 0.0..=0.1
     ),
     knob!(
         "interleave",
         "K",
         "Interleaved VPL sampling: each pixel of a K x K pattern evaluates 1/K^2 of the VPLs, then a geometry-aware filter reconstructs (1 = off).",
         count 1..=16,
-        indirect_opts.interleave
+        indirect_opts.interleave, slider 1..=16
     ),
     knob!(
         "vpl-bias",
         "B",
         "Depth margin of VPL map lookups, in texel footprints.",
         non_negative,
-        indirect_opts.bias
+        indirect_opts.bias, slider 0.0..=4.0
     ),
     knob!(
         "vpl-map-res",
@@ -631,7 +644,7 @@ pub const KNOBS: &[Knob] = &[
         "T",
         "VPL maps: tessellate triangles until projected edges are at most T texels (`inf`: no tessellation), as `--tess` for the light maps.",
         positive_or_inf,
-        indirect_opts.map.tess_texels
+        indirect_opts.map.tess_texels, slider 1.0..=64.0
     ),
     knob!(
         "vpl-filter",

@@ -522,13 +522,13 @@ impl Inspector {
                 let paged = sh.light_maps == LightMaps::Paged && sh.map.kind == MapKind::Cube;
                 ui.add_enabled_ui(!paged, |ui| resolution_combo(ui, "map resolution", &mut sh.map.resolution));
                 ui.add_enabled_ui(paged, |ui| {
-                    ui.add(egui::Slider::new(&mut sh.map_detail, 0.25..=4.0).text("map detail (texels per pixel)"));
-                    ui.add(egui::Slider::new(&mut sh.map_budget, 1..=256).text("map budget (MB per light)"));
+                    ui.add(egui::Slider::new(&mut sh.map_detail, knob_range("map-detail")).text("map detail (texels per pixel)"));
+                    ui.add(egui::Slider::new(&mut sh.map_budget, knob_range("map-budget")).text("map budget (MB per light)"));
                 });
-                ui.add(egui::Slider::new(&mut sh.bias, 0.0..=4.0).text("bias (texels)"));
+                ui.add(egui::Slider::new(&mut sh.bias, knob_range("bias")).text("bias (texels)"));
                 ui.add_enabled_ui(o.shadows == Shadows::Smerts, |ui| {
                     combo(ui, "borders", &mut sh.borders);
-                    ui.add(egui::Slider::new(&mut sh.dilate, 0..=4).text("dilation (px)"));
+                    ui.add(egui::Slider::new(&mut sh.dilate, knob_range("dilate")).text("dilation (px)"));
                     combo(ui, "ambiguous borders", &mut sh.ambiguous).on_hover_text(
                         "Border pairs made only by occluders within the bias band: a whole shadow ray, or those triangles alone tested with it.",
                     );
@@ -541,7 +541,7 @@ impl Inspector {
                     }
                     if tess {
                         ui.add(
-                            egui::Slider::new(&mut sh.map.tess_texels, 1.0..=64.0)
+                            egui::Slider::new(&mut sh.map.tess_texels, knob_range("tess"))
                                 .logarithmic(true)
                                 .text("tessellation (texels)"),
                         );
@@ -556,11 +556,11 @@ impl Inspector {
             combo(ui, "indirect", &mut o.indirect);
             ui.add_enabled_ui(o.indirect != Indirect::None, |ui| {
                 let io = &mut o.indirect_opts;
-                ui.add(egui::Slider::new(&mut io.vpl.paths, 0..=256).text("VPL paths"));
-                ui.add(egui::Slider::new(&mut io.vpl.bounces, 1..=4).text("VPL bounces"));
+                ui.add(egui::Slider::new(&mut io.vpl.paths, knob_range("vpls")).text("VPL paths"));
+                ui.add(egui::Slider::new(&mut io.vpl.bounces, knob_range("vpl-bounces")).text("VPL bounces"));
                 ui.add(egui::DragValue::new(&mut io.vpl.seed).prefix("VPL seed "));
                 ui.add(
-                    egui::Slider::new(&mut io.clamp, 0.0..=0.1)
+                    egui::Slider::new(&mut io.clamp, knob_range("vpl-clamp"))
                         .logarithmic(true)
                         .text("VPL clamp (of the diagonal)"),
                 );
@@ -568,20 +568,20 @@ impl Inspector {
                     resolution_combo(ui, "VPL map resolution", &mut io.map.resolution);
                     combo(ui, "VPL map format", &mut io.format);
                     combo(ui, "VPL filter", &mut io.filter);
-                    ui.add(egui::Slider::new(&mut io.bias, 0.0..=4.0).text("VPL bias (texels)"));
+                    ui.add(egui::Slider::new(&mut io.bias, knob_range("vpl-bias")).text("VPL bias (texels)"));
                     let mut tess = io.map.tess_texels.is_finite();
                     if ui.checkbox(&mut tess, "tessellate VPL maps").changed() {
                         io.map.tess_texels = if tess { IndirectOptions::default().map.tess_texels } else { f32::INFINITY };
                     }
                     if tess {
                         ui.add(
-                            egui::Slider::new(&mut io.map.tess_texels, 1.0..=64.0)
+                            egui::Slider::new(&mut io.map.tess_texels, knob_range("vpl-tess"))
                                 .logarithmic(true)
                                 .text("VPL tessellation (texels)"),
                         );
                     }
                 });
-                ui.add(egui::Slider::new(&mut io.interleave, 1..=8).text("interleave"));
+                ui.add(egui::Slider::new(&mut io.interleave, knob_range("interleave")).text("interleave"));
             });
         });
         if let Some(r) = &self.result {
@@ -1739,6 +1739,13 @@ const RAY_ROWS: [RayRow; 8] = [
     ("total", |c| c.total()),
 ];
 
+/// The slider range of knob `name`, as [`hyrt::options::KNOBS`] declares it (one place for
+/// the CLI's checks and the inspector's sliders).
+fn knob_range<T: egui::emath::Numeric>(name: &str) -> std::ops::RangeInclusive<T> {
+    let (lo, hi) = hyrt::options::knob(name).and_then(|k| k.slider).unwrap_or((0.0, 1.0));
+    T::from_f64(lo)..=T::from_f64(hi)
+}
+
 /// Replaces every number followed by " ms" with "…" (for snapshots).
 pub fn mask_ms(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
@@ -1880,6 +1887,27 @@ fn crosshair(ui: &egui::Ui, p: Pos2) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every knob the inspector offers a slider for declares the slider's range, within the
+    /// values the knob accepts.
+    #[test]
+    fn sliders_take_their_ranges_from_the_knobs() {
+        let src = include_str!("app.rs");
+        let names: Vec<&str> =
+            src.split("knob_range(\"").skip(1).filter_map(|r| r.split('"').next()).collect();
+        assert!(names.len() >= 11, "{names:?}");
+        for name in names {
+            let k = hyrt::options::knob(name).unwrap_or_else(|| panic!("no knob {name}"));
+            let (lo, hi) = k.slider.unwrap_or_else(|| panic!("knob {name} declares no slider range"));
+            assert!(lo < hi, "{name}");
+            for v in [lo, hi] {
+                assert!(
+                    (k.set)(&mut hyrt::options::Options::hybrid(), &v.to_string()).is_ok(),
+                    "{name}: {v}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn times_are_masked() {

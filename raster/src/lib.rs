@@ -229,8 +229,8 @@ pub struct RasterOptions {
     pub barycentrics: bool,
     /// Write [`Target::depth`] (used by [`rasterize`] only). Default `true`. Callers that need
     /// only the ids (the renderer's visibility pass, which recomputes each hit from its ray)
-    /// turn it off: the buffer is left empty and its 4 bytes per pixel are not written (4-5 %
-    /// of that pass, measured). The depth test itself is unchanged.
+    /// turn it off: the buffer is left empty and its 4 bytes per pixel are not written (a
+    /// measurable part of that pass). The depth test itself is unchanged.
     pub depth: bool,
     /// Write [`Target::rival`] (used by [`rasterize`] only). Default `false`.
     pub rivals: bool,
@@ -330,8 +330,8 @@ pub trait TriangleSource: Sync {
 /// The working memory of [`rasterize`] (set-up triangles and tile bins), kept between frames.
 ///
 /// Why: the bins and set-up triangles of a frame are megabytes; allocated afresh each frame, the
-/// allocator maps and unmaps them and every page faults again, which measured a third of the
-/// single-threaded frame time of a 70k-triangle scene. Results do not depend on what was drawn
+/// allocator maps and unmaps them and every page faults again, a large part of a frame's time
+/// (measured single-threaded on a 70k-triangle scene). Results do not depend on what was drawn
 /// before.
 #[derive(Default)]
 pub struct Rasterizer {

@@ -103,7 +103,7 @@ impl TileGrid {
 
 /// The set-up triangles of one chunk of the input, binned by tile. Its vectors are kept by a
 /// [`crate::Rasterizer`] and reused frame after frame: allocating them afresh costs page faults
-/// (a third of the frame, measured) once they are large enough to be mapped and unmapped.
+/// (a large part of the frame, measured) once they are large enough to be mapped and unmapped.
 #[derive(Default)]
 pub(crate) struct Chunk {
     tris: Vec<SetupTri>,

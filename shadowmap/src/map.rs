@@ -612,7 +612,7 @@ fn reserved_huge<T>(n: usize) -> Vec<T> {
 /// every map; first touching them in 4 KB pages (a fault and a zeroed page each) was a large
 /// part of drawing the first face. With transparent huge pages in `madvise` mode (the usual
 /// Linux default) they fault in 2 MB pages. Not used for the stored faces: a frame keeps a map
-/// per light (a gigabyte on the Cornell box), and huge pages for all of it made the kernel
+/// per light, and huge pages for all of it made the kernel
 /// compact memory at fault time, which made the first frame slower and erratic. A hint only:
 /// nothing changes if the kernel declines, or elsewhere than Linux.
 fn advise_huge<T>(v: &Vec<T>) {

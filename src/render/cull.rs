@@ -23,8 +23,8 @@ use glam::{DVec3, Vec3};
 use crate::camera::CameraRays;
 
 /// Triangles per cluster. Small enough that a cluster rarely straddles the view when most of
-/// it is off screen (64 culls 99.6 % of the conference room's off-screen triangles, 1024 only
-/// 96 %), large enough that the boxes are a small fraction of the scene's memory.
+/// it is off screen (larger clusters cull markedly fewer off-screen triangles), large enough
+/// that the boxes are a small fraction of the scene's memory.
 pub const CLUSTER: usize = 64;
 
 /// Bounding boxes of runs of [`CLUSTER`] consecutive triangles (the last run may be shorter).

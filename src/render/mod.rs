@@ -110,7 +110,7 @@ pub struct Renderer<'a> {
     /// Rays per pixel, with `Options::keep_buffers`.
     pub(crate) pixel_rays: pixel_rays::PixelRays,
     /// The G-buffer of the last frame, reused by the next: the visibility pass overwrites every
-    /// pixel, and a fresh one (7 MB at 640x480) cost a fill pass of its own.
+    /// pixel, and a fresh one (tens of bytes per pixel) cost a fill pass of its own.
     gbuffer: std::sync::Mutex<Vec<Option<Hit>>>,
     /// The scene's bounding box (`Scene::bounds` walks every vertex: once per scene).
     pub(crate) bounds: Option<(Vec3, Vec3)>,
@@ -341,7 +341,7 @@ impl<'a> Renderer<'a> {
     pub(crate) fn take_gbuffer(&self, n: usize) -> Vec<Option<Hit>> {
         let mut g = std::mem::take(&mut *self.gbuffer.lock().unwrap_or_else(|e| e.into_inner()));
         if g.len() != n {
-            // In parallel: a sequential fill of 20 bytes per pixel was 6 % of the raster pass.
+            // In parallel: a sequential fill was a visible part of the raster pass.
             g.clear();
             g.par_extend(rayon::iter::repeat_n(None, n));
         }

@@ -423,7 +423,7 @@ impl Tracer {
             // hold a hit too close to the best for f32 to order, unless both hits' error bounds
             // together exceed the window (grazing slivers): such a hit is then missed, the same
             // way every time. (Reaching four error bounds past the best hit as well cost the
-            // primary rays 5 % more traversal for those few.)
+            // primary rays more traversal for those few.)
             best.map_or(f32::INFINITY, |(bt, _, _, _)| (bt * (1.0 + DEPTH_TIE)).next_up())
         });
         best.map(|(t, _, i, bary)| Hit { t: t / self.scale, tri: ids[i], bary })

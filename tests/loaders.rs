@@ -36,7 +36,7 @@ fn write_gz(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 /// The full error text (with anyhow's context chain) of a result that must be an error.
-fn err_text<T: Debug>(r: anyhow::Result<T>) -> String {
+fn err_text<T: Debug, E: std::fmt::Display>(r: Result<T, E>) -> String {
     format!("{:#}", r.expect_err("expected an error"))
 }
 
@@ -1071,4 +1071,47 @@ fn scene_from_gltf_toml() {
     let (lo, hi) = s.bounds().unwrap();
     assert!(((hi - lo).x - 0.7434).abs() < 1e-3, "{}", hi - lo);
     s.validate().unwrap();
+}
+
+/// Scene loading's errors are typed: the kind a caller can act on, the file at fault and its
+/// line, whatever the format; the message still names them for people.
+#[test]
+fn scene_errors_give_kind_file_and_line() {
+    use hyrt::scene::ErrorKind;
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.toml");
+    let e = scene::load(missing.to_str().unwrap()).unwrap_err();
+    assert_eq!((e.kind, e.file.as_deref(), e.line), (ErrorKind::Io, Some(missing.as_path()), None), "{e}");
+
+    let bad = write(dir.path(), "bad.toml", "name = \"x\"\n[camera\n");
+    let e = scene::load(bad.to_str().unwrap()).unwrap_err();
+    assert_eq!((e.kind, e.file.as_deref(), e.line), (ErrorKind::Syntax, Some(bad.as_path()), Some(2)), "{e}");
+
+    let obj = write(dir.path(), "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let invalid = write(
+        dir.path(),
+        "invalid.toml",
+        &format!(
+            "[[mesh]]\npath = \"{}\"\n\n[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\ndirection = [0, 0, -1]\nfov_y = 40\n",
+            obj.file_name().unwrap().to_str().unwrap()
+        ),
+    );
+    let e = scene::load(invalid.to_str().unwrap()).unwrap_err();
+    assert_eq!(
+        (e.kind, e.file.as_deref(), e.line),
+        (ErrorKind::Invalid, Some(invalid.as_path()), Some(4)),
+        "{e}"
+    );
+    assert!(e.to_string().contains("invalid.toml:4: [camera] needs exactly one"), "{e}");
+
+    let nan = write(dir.path(), "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+    let e = scene::load(nan.to_str().unwrap()).unwrap_err();
+    assert_eq!((e.kind, e.file.as_deref(), e.line), (ErrorKind::Syntax, Some(nan.as_path()), Some(3)), "{e}");
+
+    let draco = shared("gltf-samples/Duck/glTF-Draco/Duck.gltf");
+    let e = scene::load(draco.to_str().unwrap()).unwrap_err();
+    assert_eq!((e.kind, e.file.as_deref()), (ErrorKind::Unsupported, Some(draco.as_path())), "{e}");
+
+    let e = scene::load("no-such-scene").unwrap_err();
+    assert_eq!((e.kind, e.file.as_deref()), (ErrorKind::UnknownScene, None), "{e}");
 }

@@ -127,7 +127,7 @@ pub struct CompareArgs {
 /// Loads a scene (a built-in name, a scene file or a mesh file) with the command line's
 /// overrides of its image size, mirror depth, exposure and camera, and validates the result.
 pub fn load_scene(name: &str, o: scene::Overrides) -> Result<scene::Scene> {
-    scene::load_with(name, o)
+    Ok(scene::load_with(name, o)?)
 }
 
 /// Runs the CLI on parsed arguments.

@@ -114,14 +114,14 @@ use std::collections::HashSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use toml::Spanned;
 
 use super::obj::read_bytes;
-use super::{Camera, MeshData, PointLight, Scene, load_mesh};
+use super::{Camera, ErrorKind, MeshData, PointLight, Scene, SceneError, load_mesh};
 
 /// The whole file.
 #[derive(Deserialize)]
@@ -320,6 +320,24 @@ impl<'de> Deserialize<'de> for Splat3 {
     }
 }
 
+/// A line of a scene file.
+#[derive(Clone, Copy)]
+struct Loc<'p> {
+    file: &'p Path,
+    line: usize,
+}
+
+impl std::fmt::Display for Loc<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}", self.file.display(), self.line)
+    }
+}
+
+/// An [`ErrorKind::Invalid`] error at `at`: the message is `file:line: what`.
+fn invalid(at: Loc, what: String) -> anyhow::Error {
+    SceneError::new(ErrorKind::Invalid, Some(at.file), Some(at.line), format!("{at}: {what}")).into()
+}
+
 /// Loads a `.toml` scene file (format in the [module documentation](self)); mesh paths are
 /// relative to the file. The scene is not validated: the caller does that.
 pub fn load(path: &Path) -> Result<Scene> {
@@ -327,11 +345,18 @@ pub fn load(path: &Path) -> Result<Scene> {
     let bytes = read_bytes(path)?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let line = line_of(e.as_bytes(), e.utf8_error().valid_up_to());
-        anyhow!("{shown}:{line}: the file is not valid UTF-8")
+        SceneError::new(
+            ErrorKind::Syntax,
+            Some(path),
+            Some(line),
+            format!("{shown}:{line}: the file is not valid UTF-8"),
+        )
     })?;
-    let file: SceneFile =
-        toml::from_str(&text).map_err(|e| anyhow!("{shown}: {}", e.to_string().trim_end()))?;
-    let at = |span: std::ops::Range<usize>| format!("{shown}:{}", line_of(text.as_bytes(), span.start));
+    let file: SceneFile = toml::from_str(&text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text.as_bytes(), s.start));
+        SceneError::new(ErrorKind::Syntax, Some(path), line, format!("{shown}: {}", e.to_string().trim_end()))
+    })?;
+    let at = |span: std::ops::Range<usize>| Loc { file: path, line: line_of(text.as_bytes(), span.start) };
 
     if file.mesh.is_empty() {
         bail!("{shown}: the scene has no [[mesh]] (at least one is required)");
@@ -348,7 +373,12 @@ pub fn load(path: &Path) -> Result<Scene> {
             let forward = match (c.target, c.direction) {
                 (Some(t), None) => t.0 - eye,
                 (None, Some(d)) => d.0,
-                _ => bail!("{}: [camera] needs exactly one of 'target' and 'direction'", at(spec.span())),
+                _ => {
+                    return Err(invalid(
+                        at(spec.span()),
+                        "[camera] needs exactly one of 'target' and 'direction'".into(),
+                    ));
+                }
             };
             let up = c.up.map_or(Vec3::Y, |u| u.0);
             Some(Camera { eye, forward, up, fov_y_deg: c.fov_y, fov_x_deg: c.fov_x })
@@ -367,7 +397,7 @@ pub fn load(path: &Path) -> Result<Scene> {
             load_mesh(&mesh_path).with_context(|| format!("{shown}: mesh {}", m.path.display()))?;
         if !m.exclude_materials.is_empty() {
             mesh = exclude(mesh, &m.exclude_materials)
-                .map_err(|e| anyhow!("{}: mesh {}: {e}", at(spec.span()), m.path.display()))?;
+                .map_err(|e| invalid(at(spec.span()), format!("mesh {}: {e}", m.path.display())))?;
         }
         let scale = m.scale.map_or(Vec3::ONE, |s| s.0);
         let [rx, ry, rz] = m.rotate.unwrap_or_default().0.to_array().map(f32::to_radians);
@@ -376,11 +406,13 @@ pub fn load(path: &Path) -> Result<Scene> {
         let transform = Mat4::from_scale_rotation_translation(scale, rotation, translation);
         // A zero scale would make the normal matrix infinite (zero normals after normalising).
         if !transform.is_finite() || transform.determinant() == 0.0 {
-            bail!(
-                "{}: mesh {}: scale, rotate and translate must be finite numbers and scale non-zero",
+            return Err(invalid(
                 at(spec.span()),
-                m.path.display()
-            );
+                format!(
+                    "mesh {}: scale, rotate and translate must be finite numbers and scale non-zero",
+                    m.path.display()
+                ),
+            ));
         }
         if transform != Mat4::IDENTITY {
             mesh.transform(transform);
@@ -422,21 +454,23 @@ pub fn load(path: &Path) -> Result<Scene> {
                 m.mirror_source = super::MirrorSource::SceneFile;
             }
             if let Err(e) = m.check() {
-                bail!("{}: [[material]] '{}': {e}", at(spec.span()), o.name);
+                return Err(invalid(at(spec.span()), format!("[[material]] '{}': {e}", o.name)));
             }
         }
         if !found {
-            bail!(
-                "{}: [[material]] '{}' matches no material in the scene (materials: {})",
+            return Err(invalid(
                 at(spec.span()),
-                o.name,
-                name_list(scene.materials.iter().map(|m| m.name.as_str()))
-            );
+                format!(
+                    "[[material]] '{}' matches no material in the scene (materials: {})",
+                    o.name,
+                    name_list(scene.materials.iter().map(|m| m.name.as_str()))
+                ),
+            ));
         }
     }
 
     for spec in &file.light {
-        match spec.get_ref().light().map_err(|e| anyhow::anyhow!("{}: [[light]]: {e}", at(spec.span())))? {
+        match spec.get_ref().light().map_err(|e| invalid(at(spec.span()), format!("[[light]]: {e}")))? {
             Light::Point(l) => scene.lights.push(l),
             Light::Directional(d) => scene.directional.push(d),
         }
@@ -456,7 +490,10 @@ pub fn load(path: &Path) -> Result<Scene> {
         if let Some(c) = ind.get_ref().clamp
             && !(c >= 0.0 && c.is_finite())
         {
-            bail!("{}: [indirect] clamp must be a finite number >= 0, got {c}", at(ind.span()));
+            return Err(invalid(
+                at(ind.span()),
+                format!("[indirect] clamp must be a finite number >= 0, got {c}"),
+            ));
         }
         let i = ind.get_ref();
         scene.indirect = Some(super::IndirectSettings {

@@ -45,7 +45,9 @@ use gltf::mesh::{Mode, Semantic};
 use super::cutout::{Channel, Cutout, Mask};
 use super::obj::{read_bytes, unit_normals};
 use super::texture::{Texture, decode_image as decode_bytes, load_image};
-use super::{Camera, Directional, FileCamera, Material, MeshData, MeshRange, PointLight, Spot};
+use super::{
+    Camera, Directional, ErrorKind, FileCamera, Material, MeshData, MeshRange, PointLight, SceneError, Spot,
+};
 
 /// Diffuse colour of the material given to primitives without one.
 const DEFAULT_KD: Vec3 = Vec3::splat(0.8);
@@ -68,6 +70,11 @@ fn ignorable_extension(name: &str) -> bool {
         )
 }
 
+/// An [`ErrorKind::Syntax`] error in `path`: not valid glTF.
+fn syntax(path: &Path, what: String) -> SceneError {
+    SceneError::new(ErrorKind::Syntax, Some(path), None, what)
+}
+
 /// Loads the default scene (or the first scene) of a `.gltf` or `.glb` file, flattened to
 /// world space.
 ///
@@ -86,10 +93,13 @@ pub fn load(path: &Path) -> Result<MeshData> {
     if bytes.starts_with(b"glTF")
         && bytes.get(8..12).is_some_and(|l| u32::from_le_bytes([l[0], l[1], l[2], l[3]]) < 12)
     {
-        bail!("{shown}: not a valid GLB file: the header declares a length shorter than the header");
+        bail!(syntax(
+            path,
+            format!("{shown}: not a valid GLB file: the header declares a length shorter than the header")
+        ));
     }
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| anyhow!("{shown}: not a valid glTF or GLB file: {e}"))?;
+        .map_err(|e| syntax(path, format!("{shown}: not a valid glTF or GLB file: {e}")))?;
 
     // Unsupported required extensions are reported by name before validation, which would only
     // say "Unsupported extension".
@@ -105,7 +115,12 @@ pub fn load(path: &Path) -> Result<MeshData> {
             "KHR_mesh_quantization" => " (quantized vertex attributes)",
             _ => "",
         };
-        bail!("{shown}: requires the glTF extension {ext}, which hyrt does not support{what}");
+        bail!(SceneError::new(
+            ErrorKind::Unsupported,
+            Some(path),
+            None,
+            format!("{shown}: requires the glTF extension {ext}, which hyrt does not support{what}")
+        ));
     }
     json.extensions_required.clear();
     // gltf-json's validation reads each primitive's POSITION accessor before checking that the
@@ -113,15 +128,19 @@ pub fn load(path: &Path) -> Result<MeshData> {
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
             if let Some((_, a)) = prim.attributes.iter().find(|(_, a)| a.value() >= json.accessors.len()) {
-                bail!(
-                    "{shown}: invalid glTF: meshes[{m}].primitives[{p}] uses accessor {} of {}",
-                    a.value(),
-                    json.accessors.len()
-                );
+                bail!(syntax(
+                    path,
+                    format!(
+                        "{shown}: invalid glTF: meshes[{m}].primitives[{p}] uses accessor {} of {}",
+                        a.value(),
+                        json.accessors.len()
+                    )
+                ));
             }
         }
     }
-    let document = gltf::Document::from_json(json).map_err(|e| anyhow!("{shown}: invalid glTF: {e}"))?;
+    let document =
+        gltf::Document::from_json(json).map_err(|e| syntax(path, format!("{shown}: invalid glTF: {e}")))?;
     let buffers = load_buffers(path, &document, blob)?;
 
     // Each image decoded once, whichever materials read it; one that cannot be read leaves
@@ -251,12 +270,14 @@ pub fn load(path: &Path) -> Result<MeshData> {
 
     let Loader { mesh, skipped, .. } = loader;
     if mesh.positions.is_empty() {
-        if skipped > 0 {
-            bail!(
+        let what = if skipped > 0 {
+            format!(
                 "{shown}: has no triangles: {skipped} primitive(s) skipped because they are points, lines, strips or fans (only TRIANGLES is supported)"
-            );
-        }
-        bail!("{shown}: has no triangles");
+            )
+        } else {
+            format!("{shown}: has no triangles")
+        };
+        bail!(SceneError::new(ErrorKind::Invalid, Some(path), None, what));
     }
     Ok(mesh)
 }

@@ -7,6 +7,7 @@
 
 pub mod builtin;
 pub mod cutout;
+pub mod error;
 pub mod file;
 pub mod gltf;
 pub mod material;
@@ -15,6 +16,7 @@ pub mod texture;
 
 pub use material::{Material, MirrorSource};
 
+pub use error::{ErrorKind, SceneError};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
@@ -495,8 +497,14 @@ impl Scene {
         }
     }
 
-    /// Checks everything a renderer relies on; the error names the scene's origin.
-    pub fn validate(&self) -> Result<()> {
+    /// Checks everything a renderer relies on; the error ([`ErrorKind::Invalid`]) names the
+    /// scene's origin.
+    pub fn validate(&self) -> std::result::Result<(), SceneError> {
+        self.check()
+            .map_err(|e| SceneError::new(ErrorKind::Invalid, self.source.as_deref(), None, format!("{e:#}")))
+    }
+
+    fn check(&self) -> Result<()> {
         let origin = self.origin();
         if self.positions.is_empty() {
             bail!("{origin}: the scene has no triangles");
@@ -579,13 +587,23 @@ pub fn load_mesh(path: &Path) -> Result<MeshData> {
     } else if name.ends_with(".gltf") || name.ends_with(".glb") {
         gltf::load(path)
     } else {
-        bail!("{}: unknown mesh format (expected .obj, .obj.gz, .gltf or .glb)", path.display())
+        bail!(SceneError::new(
+            ErrorKind::Unsupported,
+            Some(path),
+            None,
+            format!("{}: unknown mesh format (expected .obj, .obj.gz, .gltf or .glb)", path.display())
+        ))
     }
 }
 
 /// Resolves what the CLI was given: a built-in scene name, a `.toml` scene file, or a bare mesh
 /// file (which gets an automatic camera and light). The result is validated.
-pub fn load(spec: &str) -> Result<Scene> {
+pub fn load(spec: &str) -> std::result::Result<Scene, SceneError> {
+    let file = builtin::by_name(spec).is_none().then(|| Path::new(spec));
+    load_untyped(spec).map_err(|e| SceneError::from_chain(&e, file))
+}
+
+fn load_untyped(spec: &str) -> Result<Scene> {
     let scene = if let Some(s) = builtin::by_name(spec) {
         s
     } else {
@@ -611,10 +629,15 @@ pub fn load(spec: &str) -> Result<Scene> {
             scene.frame_automatically();
             scene
         } else {
-            bail!(
-                "unknown scene '{spec}': not a built-in scene ({}) nor a .toml, .obj, .obj.gz, .gltf or .glb file",
-                builtin::NAMES.join(", ")
-            );
+            bail!(SceneError::new(
+                ErrorKind::UnknownScene,
+                None,
+                None,
+                format!(
+                    "unknown scene '{spec}': not a built-in scene ({}) nor a .toml, .obj, .obj.gz, .gltf or .glb file",
+                    builtin::NAMES.join(", ")
+                )
+            ));
         }
     };
     scene.validate()?;
@@ -633,10 +656,10 @@ pub struct Overrides {
 }
 
 /// [`load`], with some render settings overridden, validated again with them.
-pub fn load_with(spec: &str, o: Overrides) -> Result<Scene> {
+pub fn load_with(spec: &str, o: Overrides) -> std::result::Result<Scene, SceneError> {
     let mut scene = load(spec)?;
     if let Some(n) = o.camera {
-        scene.use_file_camera(n)?;
+        scene.use_file_camera(n).map_err(|e| SceneError::from_chain(&e, scene.source.as_deref()))?;
     }
     let s = &mut scene.settings;
     if let Some((w, h)) = o.size {

@@ -17,7 +17,7 @@ use glam::{Vec2, Vec3};
 
 use super::cutout::{Channel, Cutout, Mask};
 use super::texture::{Texture, load_image};
-use super::{Material, MeshData, MeshRange};
+use super::{ErrorKind, Material, MeshData, MeshRange, SceneError};
 
 /// Diffuse colour for materials without `Kd` and for faces without a material.
 const DEFAULT_KD: Vec3 = Vec3::splat(0.8);
@@ -189,7 +189,12 @@ pub fn load(path: &Path) -> Result<MeshData> {
     }
 
     if mesh.positions.is_empty() {
-        bail!("{}: has no triangles (no face with three or more vertices)", path.display());
+        bail!(SceneError::new(
+            ErrorKind::Invalid,
+            Some(path),
+            None,
+            format!("{}: has no triangles (no face with three or more vertices)", path.display())
+        ));
     }
     if !mesh.positions.iter().flatten().all(|p| p.is_finite()) {
         return Err(locate_error(path, &text, "a vertex has a NaN or infinite coordinate"));
@@ -215,7 +220,10 @@ pub(super) fn unit_normals(n: [Vec3; 3]) -> Option<[Vec3; 3]> {
 
 /// Reads a whole file; the error names the path (`path: cannot read file: <reason>`).
 pub(super) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| anyhow!("{}: cannot read file: {}", path.display(), io_message(&e)))
+    std::fs::read(path).map_err(|e| {
+        let what = format!("{}: cannot read file: {}", path.display(), io_message(&e));
+        SceneError::new(ErrorKind::Io, Some(path), None, what).into()
+    })
 }
 
 /// An I/O error's text without the trailing `(os error N)`, which says nothing to a user.
@@ -234,9 +242,10 @@ fn read_text(path: &Path) -> Result<String> {
     let gz = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz"));
     if gz {
         let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(bytes.as_slice())
-            .read_to_end(&mut out)
-            .map_err(|e| anyhow!("{}: cannot decompress gzip data: {}", path.display(), io_message(&e)))?;
+        flate2::read::MultiGzDecoder::new(bytes.as_slice()).read_to_end(&mut out).map_err(|e| {
+            let what = format!("{}: cannot decompress gzip data: {}", path.display(), io_message(&e));
+            SceneError::new(ErrorKind::Syntax, Some(path), None, what)
+        })?;
         bytes = out;
     }
     Ok(match String::from_utf8(bytes) {
@@ -248,10 +257,11 @@ fn read_text(path: &Path) -> Result<String> {
 /// Finds the line behind a failure with [`scan_obj`]; `fallback` describes the failure when
 /// the scanner finds nothing.
 fn locate_error(path: &Path, text: &str, fallback: &str) -> anyhow::Error {
-    match scan_obj(text) {
-        Some((line, msg)) => anyhow!("{}:{line}: {msg}", path.display()),
-        None => anyhow!("{}: {fallback}", path.display()),
-    }
+    let (line, what) = match scan_obj(text) {
+        Some((line, msg)) => (Some(line), format!("{}:{line}: {msg}", path.display())),
+        None => (None, format!("{}: {fallback}", path.display())),
+    };
+    SceneError::new(ErrorKind::Syntax, Some(path), line, what).into()
 }
 
 /// A source line for an error message, shortened so a huge line cannot flood the terminal.
@@ -401,18 +411,22 @@ fn load_mtllib(obj: &Path, obj_text: &str, dir: &Path, name: &Path) -> Result<to
     let mut names = Default::default();
     for file in files {
         let bytes = std::fs::read(&file).map_err(|e| {
-            let line = mtllib_line(obj_text, &name_str).map(|l| format!(":{l}")).unwrap_or_default();
-            anyhow!(
-                "{}{line}: cannot read material library {}: {}",
+            let line = mtllib_line(obj_text, &name_str);
+            let at = line.map(|l| format!(":{l}")).unwrap_or_default();
+            let what = format!(
+                "{}{at}: cannot read material library {}: {}",
                 obj.display(),
                 file.display(),
                 io_message(&e)
-            )
+            );
+            SceneError::new(ErrorKind::Io, Some(obj), line, what)
         })?;
         let text = String::from_utf8_lossy(&bytes);
         let normalised = normalise_mtl(&file, obj, &text)?;
-        let (mut mats, map) = tobj::load_mtl_buf(&mut normalised.as_bytes())
-            .map_err(|e| anyhow!("{}: malformed material library: {e}", file.display()))?;
+        let (mut mats, map) = tobj::load_mtl_buf(&mut normalised.as_bytes()).map_err(|e| {
+            let what = format!("{}: malformed material library: {e}", file.display());
+            SceneError::new(ErrorKind::Syntax, Some(&file), None, what)
+        })?;
         // A texture's file is relative to its library: kept as a path from here.
         let lib_dir = file.parent().unwrap_or(Path::new(""));
         for m in &mut mats {
@@ -482,8 +496,9 @@ fn normalise_mtl(file: &Path, obj: &Path, text: &str) -> Result<String> {
     let mut out = String::with_capacity(text.len() + 64);
     for (i, raw) in text.lines().enumerate() {
         let line = raw.trim();
-        let err = |msg: String| {
-            anyhow!("{}:{}: {msg} (material library of {})", file.display(), i + 1, obj.display())
+        let err = |msg: String| -> anyhow::Error {
+            let what = format!("{}:{}: {msg} (material library of {})", file.display(), i + 1, obj.display());
+            SceneError::new(ErrorKind::Syntax, Some(file), Some(i + 1), what).into()
         };
         let mut words = line.split_whitespace();
         let keyword = words.next().unwrap_or("");

@@ -7,7 +7,8 @@
 //!
 //! [`worker`] renders on a background thread, [`views`] turns buffers into images (pure
 //! functions), [`pick`] gathers what is known at one pixel, [`navigate`] moves the camera,
-//! [`app`] is the window.
+//! [`app`] is the window (its panels, central views and viewport navigation in files of
+//! their own).
 
 pub mod app;
 pub mod navigate;

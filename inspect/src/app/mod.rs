@@ -24,8 +24,8 @@ mod navigation;
 mod panels;
 mod screens;
 
-use details::*;
 pub use details::reran;
+use details::*;
 use navigation::*;
 use screens::*;
 

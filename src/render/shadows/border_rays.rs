@@ -52,16 +52,28 @@ impl Shadowing<'_> {
             .par_chunks(RAY_CHUNK)
             .map(|chunk| {
                 let mut c = RayCounts::default();
+                // A light's rays and its kept hints are both in pixel order: a cursor walks the
+                // hints alongside the rays (a search per ray cost a tenth of the pass).
+                let mut cursor: Option<(usize, usize)> = None;
                 let out = chunk
                     .iter()
                     .map(|&(l, k)| {
                         let (l, s) = (l as usize, &points[k as usize]);
                         let i = pixels[k as usize];
-                        let hint = match self.hints[l].binary_search_by_key(&i, |e| e.pixel) {
-                            Ok(at) => self.hints[l][at].hint,
+                        let kept = &self.hints[l];
+                        let mut at = match cursor {
+                            Some((cl, at)) if cl == l => at,
+                            _ => kept.partition_point(|e| e.pixel < i),
+                        };
+                        while kept.get(at).is_some_and(|e| e.pixel < i) {
+                            at += 1;
+                        }
+                        cursor = Some((l, at));
+                        let hint = match kept.get(at) {
+                            Some(e) if e.pixel == i => e.hint,
                             // Undecided by the Laplacian, the dilation or no map: no lookup
                             // was kept; the map's texels give a cheaper hint.
-                            Err(_) => hint(&cls[l], &self.resolution, l, s, r),
+                            _ => hint(&cls[l], &self.resolution, l, s, r),
                         };
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);

@@ -198,3 +198,42 @@ fn unchanged_scene_rebuilds_nothing() {
     assert!(f.stats.rays.vpl_path > 0);
     assert_eq!(f.film, fresh(o));
 }
+
+/// Every configuration's plan, in frame order: each buffer a pass reads ([`Pass::reads`]) is
+/// written by a pass that runs before it ([`Pass::writes`]); and a frame runs exactly the
+/// plan's passes (the runner gates by the plan alone: its times name those passes and no
+/// other).
+#[test]
+fn passes_read_what_earlier_passes_wrote_and_frames_run_the_plan() {
+    use hyrt::plan::Buffer;
+    use hyrt::render::{Shadows, Visibility};
+    let scene = cornell(24, 18);
+    let mut checked = 0;
+    for visibility in [Visibility::Rays, Visibility::Raster] {
+        for shadows in [Shadows::Rays, Shadows::Maps, Shadows::Smerts] {
+            for indirect in [Indirect::None, Indirect::Rays, Indirect::Maps] {
+                let mut o = Options::hybrid();
+                (o.visibility, o.shadows, o.indirect) = (visibility, shadows, indirect);
+                o.indirect_opts.vpl.paths = 4;
+                o.indirect_opts.map.resolution = 32;
+                let r = Renderer::new(&scene, o);
+                let mut written: Vec<Buffer> = Vec::new();
+                let run: Vec<Pass> = r.plan.run.iter().map(|d| d.pass).collect();
+                assert!(run.windows(2).all(|w| w[0] < w[1]), "{o:?}: plan not in frame order: {run:?}");
+                for &p in &run {
+                    for b in p.reads() {
+                        assert!(written.contains(b), "{o:?}: {p} reads {b:?}, which no earlier pass wrote");
+                    }
+                    written.extend(p.writes());
+                }
+                let f = r.render(&|| {});
+                let timed: Vec<Pass> =
+                    f.stats.pass_ms.keys().copied().filter(|p| p.part_of().is_none()).collect();
+                let planned: Vec<Pass> = run.iter().copied().filter(|&p| p != Pass::BvhBuild).collect();
+                assert_eq!(timed, planned, "{o:?}: the frame ran other passes than the plan");
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 18);
+}

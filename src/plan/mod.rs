@@ -7,7 +7,7 @@ use serde::Serialize;
 
 pub mod pass;
 
-pub use pass::Pass;
+pub use pass::{Buffer, Pass};
 
 use crate::{
     options::{Choice, Indirect, Options, Shadows, Visibility},

@@ -1,8 +1,9 @@
 //! The passes of a frame: one name per pass, written here once.
 //!
 //! The plan gates passes by this type ([`crate::plan::Plan::runs`]), the frame records their
-//! times by it ([`crate::render::FrameStats::record`]), and the CLI's statistics, `hyrt bench` and the
-//! inspector list them in [`Pass::ALL`]'s order under [`Pass::name`].
+//! times by it ([`crate::render::FrameStats::pass_ms`]), and the CLI's statistics, `hyrt bench`
+//! and the inspector list them in [`Pass::ALL`]'s order under [`Pass::name`]. What each reads
+//! and writes is declared here too ([`Pass::reads`], [`Pass::writes`]).
 
 use serde::{Serialize, Serializer};
 
@@ -101,6 +102,77 @@ impl Pass {
             (Some(p), _) => p as usize,
             (None, "total" | "frame") => Pass::ALL.len() + 1,
             _ => Pass::ALL.len(),
+        }
+    }
+}
+
+/// A named buffer of a frame (or a cache a frame fills): what passes read and write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Buffer {
+    /// The BVH over the scene's triangles.
+    Bvh,
+    /// Per pixel, the camera hit: triangle, distance, barycentrics.
+    Gbuffer,
+    /// The pixels whose primary ray waits for the BVH (raster visibility under SMeRTS).
+    Deferred,
+    /// The light maps (cached across frames).
+    LightMaps,
+    /// Per pixel and light: whether it faces the pixel, and the decision, lit or not.
+    Decisions,
+    /// Per pixel and light: the pairs a shadow ray decides.
+    BorderPairs,
+    /// Per pixel, the direct light.
+    Direct,
+    /// Per pixel, the diffuse shading point (for the VPL maps' gather).
+    Points,
+    /// The VPLs (cached).
+    Vpls,
+    /// One paraboloid map per VPL (cached).
+    VplMaps,
+    /// Per pixel, the indirect light.
+    Indirect,
+    /// Per pixel, the light of the mirror paths.
+    Specular,
+}
+
+impl Pass {
+    /// The buffers the pass reads: each is written by a pass that runs before it in every plan
+    /// that runs it (a test holds the plans to it). `Points` is read where it was made (VPL
+    /// maps); else the pass makes its own shading points.
+    pub const fn reads(self) -> &'static [Buffer] {
+        use Buffer::*;
+        match self {
+            Pass::BvhBuild => &[],
+            Pass::Visibility | Pass::VisCull | Pass::VisRaster | Pass::VisResolve => &[Bvh],
+            Pass::MapBuild => &[Gbuffer],
+            Pass::Classify => &[Gbuffer, LightMaps],
+            Pass::Borders => &[Decisions],
+            Pass::ShadowRays => &[Bvh, Gbuffer, Deferred, LightMaps, Decisions, BorderPairs],
+            Pass::Direct => &[Bvh, Gbuffer],
+            Pass::VplGen => &[Bvh],
+            Pass::VplMapBuild => &[Vpls],
+            Pass::Indirect => &[Bvh, Gbuffer, Vpls],
+            Pass::Specular => &[Bvh, Gbuffer],
+        }
+    }
+
+    /// The buffers the pass writes (or adds to).
+    pub const fn writes(self) -> &'static [Buffer] {
+        use Buffer::*;
+        match self {
+            Pass::BvhBuild => &[Bvh],
+            Pass::Visibility | Pass::VisCull | Pass::VisRaster | Pass::VisResolve => &[Gbuffer, Deferred],
+            Pass::MapBuild => &[LightMaps],
+            Pass::Classify => &[Decisions, Direct, Points],
+            Pass::Borders => &[BorderPairs],
+            // The deferred pixels' hits, their decisions by rays and their shading points; the
+            // border pairs' decisions; those pixels' direct light again.
+            Pass::ShadowRays => &[Gbuffer, Decisions, Direct, Points],
+            Pass::Direct => &[Direct, Points],
+            Pass::VplGen => &[Vpls],
+            Pass::VplMapBuild => &[VplMaps],
+            Pass::Indirect => &[Indirect],
+            Pass::Specular => &[Specular],
         }
     }
 }

@@ -1,22 +1,9 @@
 //! A frame: the plan's passes in order, over named buffers.
 //!
-//! ```text
-//! pass           reads                          writes
-//! visibility     scene, camera                  gbuffer (camera hits), deferred (pixels whose
-//!                                               primary ray waits for the BVH)
-//! map_build      gbuffer                        light maps (cached)
-//! classify       gbuffer, light maps            shadowing (per pixel and light: faces, lit,
-//!                                               edge bits), direct, points
-//! borders        shadowing                      shadowing (und: the pairs a ray decides)
-//! shadow_rays    gbuffer, deferred, shadowing   gbuffer (deferred hits), shadowing (lit),
-//!                                               direct (those pixels again), points
-//! direct         gbuffer                        direct, points        (the reference's)
-//! vpl_gen        scene, lights                  VPLs (cached)
-//! vpl_map_build  VPLs                           VPL maps (cached)
-//! indirect       gbuffer, points, VPLs (maps)   indirect
-//! specular       gbuffer, shadowing, VPLs       specular              (mirror paths)
-//! compose        direct, indirect, specular     film
-//! ```
+//! What each pass reads and writes is declared once, by [`Pass::reads`] and [`Pass::writes`]
+//! (the buffers are [`crate::plan::Buffer`]); a test holds every plan to it (each buffer a pass
+//! reads was written by a pass before it) and every frame to its plan (it runs those passes and
+//! no other).
 //!
 //! Which passes run is the [`Plan`](crate::plan::Plan)'s decision alone; the
 //! [`Runner`] runs, times and records them. `classify` shades as it decides (direct light

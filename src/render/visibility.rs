@@ -113,8 +113,8 @@ pub(crate) fn run(
     (gbuffer, deferred)
 }
 
-/// Casts the primary rays [`run`] deferred (pixels `deferred`) into `gbuffer`.
-pub fn resolve_deferred(r: &Renderer, gbuffer: &mut [Option<Hit>], deferred: &[u32]) -> RayCounts {
+/// Casts the primary rays the visibility pass deferred (pixels `deferred`) into `gbuffer`.
+pub(crate) fn resolve_deferred(r: &Renderer, gbuffer: &mut [Option<Hit>], deferred: &[u32]) -> RayCounts {
     let w = r.scene.settings.width.max(1);
     let hits: Vec<(Option<Hit>, RayCounts)> = deferred
         .par_iter()

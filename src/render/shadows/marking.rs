@@ -25,7 +25,7 @@ pub(crate) struct Needs {
 
 /// The level guide of paged maps for `camera` (`hyrt_shadowmap::paged`): a pixel subtends
 /// `2 tan(fov_y / 2) / height` radians at the image centre. A frame's guide for light `l` is
-/// this one capped at [`LightStats::level_cap`].
+/// this one capped at [`LightStats::level_cap`](super::LightStats::level_cap).
 pub fn resolution_guide(
     camera: &crate::camera::CameraRays,
     shadow: &crate::render::ShadowOptions,

@@ -93,6 +93,24 @@ enum Drag {
     Light(usize),
 }
 
+/// The viewport's navigation state.
+struct Navigation {
+    /// Zoom and pan of the screen-sized images (shared by all of them): the magnification and
+    /// the centre of the visible window, in image fractions.
+    zoom: f32,
+    center: Vec2,
+    /// What a drag in progress is doing.
+    drag: Option<Drag>,
+    /// Fly speed in scene units per second (from the scene's size).
+    fly_speed: f32,
+}
+
+impl Default for Navigation {
+    fn default() -> Self {
+        Self { zoom: 1.0, center: Vec2::splat(0.5), drag: None, fly_speed: 1.0 }
+    }
+}
+
 /// The inspector's state.
 pub struct Inspector {
     setup: Setup,
@@ -113,10 +131,8 @@ pub struct Inspector {
     pub vpl: usize,
     vpl_map: Option<Box<VplMap>>,
     vpl_requested: Option<(u64, usize)>,
-    /// Zoom and pan of the screen-sized images (shared by all of them): the magnification and
-    /// the centre of the visible window, in image fractions.
-    zoom: f32,
-    center: Vec2,
+    /// How the viewport is being looked at and moved about.
+    nav: Navigation,
     /// The picked pixel.
     pub picked: Option<[u32; 2]>,
     /// Show wall times as "…" (snapshot tests: times vary from run to run).
@@ -134,11 +150,8 @@ pub struct Inspector {
     /// The pose and options the reference was asked for by hand.
     reference_asked: Option<(Options, Pose)>,
     history: VecDeque<Sample>,
-    drag: Option<Drag>,
     /// The light the viewport's gizmo moves.
     pub light_edit: usize,
-    /// Fly speed in scene units per second (from the scene's size).
-    fly_speed: f32,
     camera_toml: Option<String>,
 }
 
@@ -161,8 +174,7 @@ impl Inspector {
             vpl: 0,
             vpl_map: None,
             vpl_requested: None,
-            zoom: 1.0,
-            center: Vec2::splat(0.5),
+            nav: Navigation::default(),
             picked: None,
             hide_times: false,
             pose: None,
@@ -172,9 +184,7 @@ impl Inspector {
             auto_reference: true,
             reference_asked: None,
             history: VecDeque::new(),
-            drag: None,
             light_edit: 0,
-            fly_speed: 1.0,
             camera_toml: None,
         }
     }
@@ -327,7 +337,7 @@ impl Inspector {
             self.reset_camera();
             return;
         }
-        if self.drag != Some(Drag::Look) {
+        if self.nav.drag != Some(Drag::Look) {
             return;
         }
         let (dt, step) = ctx.input(|i| {
@@ -343,7 +353,7 @@ impl Inspector {
         });
         if step != V3::ZERO {
             let fast = if ctx.input(|i| i.modifiers.shift) { 4.0 } else { 1.0 };
-            self.set_camera(navigate::fly(&cam, step * (self.fly_speed * fast * dt)));
+            self.set_camera(navigate::fly(&cam, step * (self.nav.fly_speed * fast * dt)));
             ctx.request_repaint();
         }
     }
@@ -355,7 +365,7 @@ impl Inspector {
                 Reply::Loaded(l) => {
                     self.options = l.options;
                     let pose = Pose::of(&l.scene);
-                    self.fly_speed =
+                    self.nav.fly_speed =
                         l.scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length() * 0.25).max(1e-6);
                     self.home = Some(pose.clone());
                     self.pose = Some(pose);
@@ -410,8 +420,8 @@ impl Inspector {
         self.textures.clear();
         self.vpl_map = None;
         self.vpl_requested = None;
-        self.zoom = 1.0;
-        self.center = Vec2::splat(0.5);
+        self.nav.zoom = 1.0;
+        self.nav.center = Vec2::splat(0.5);
         self.pose = None;
         self.home = None;
         self.moved_at = None;

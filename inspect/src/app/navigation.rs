@@ -33,7 +33,7 @@ impl Inspector {
             )
         });
         if resp.is_pointer_button_down_on() && secondary {
-            self.drag = Some(Drag::Look);
+            self.nav.drag = Some(Drag::Look);
         } else if resp.drag_started() {
             let axis = gizmo.zip(origin).and_then(|(g, o)| {
                 (0..3)
@@ -42,15 +42,15 @@ impl Inspector {
                     .min_by(|a, b| a.1.total_cmp(&b.1))
                     .map(|(a, _)| a)
             });
-            self.drag = Some(match axis {
+            self.nav.drag = Some(match axis {
                 Some(a) if !shift && !middle => Drag::Light(a),
                 _ if shift || middle => Drag::Pan,
                 _ => Drag::Orbit,
             });
         }
         let d = resp.drag_delta();
-        let height = resp.rect.height().max(1.0) / self.zoom;
-        match self.drag {
+        let height = resp.rect.height().max(1.0) / self.nav.zoom;
+        match self.nav.drag {
             _ if d == Vec2::ZERO => {}
             Some(Drag::Orbit) => {
                 self.set_camera(navigate::orbit(&cam, -d.x * TURN_PER_POINT, d.y * TURN_PER_POINT))
@@ -72,20 +72,20 @@ impl Inspector {
             None => {}
         }
         let released = !resp.is_pointer_button_down_on() && !resp.dragged();
-        if released && (self.drag != Some(Drag::Look) || !secondary) {
-            self.drag = None;
+        if released && (self.nav.drag != Some(Drag::Look) || !secondary) {
+            self.nav.drag = None;
         }
         if resp.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
-                self.set_camera(navigate::dolly(&cam, (-scroll * 0.002).exp(), self.fly_speed * 1e-3));
+                self.set_camera(navigate::dolly(&cam, (-scroll * 0.002).exp(), self.nav.fly_speed * 1e-3));
             }
         }
     }
 
     pub(super) fn uv(&self) -> Rect {
-        let half = Vec2::splat(0.5 / self.zoom);
-        Rect::from_min_max((self.center - half).to_pos2(), (self.center + half).to_pos2())
+        let half = Vec2::splat(0.5 / self.nav.zoom);
+        Rect::from_min_max((self.nav.center - half).to_pos2(), (self.nav.center + half).to_pos2())
     }
 
     /// Zooms by `factor` keeping image point `at` (fractions of the visible window) in place.
@@ -93,17 +93,17 @@ impl Inspector {
         let at = at.unwrap_or(Vec2::splat(0.5));
         let uv = self.uv();
         let fixed = uv.min.to_vec2() + at * uv.size();
-        let zoom = (self.zoom * factor).clamp(1.0, 64.0);
+        let zoom = (self.nav.zoom * factor).clamp(1.0, 64.0);
         // The fixed point keeps its place in the window.
-        self.center = fixed + (Vec2::splat(0.5) - at) / zoom;
-        self.zoom = zoom;
+        self.nav.center = fixed + (Vec2::splat(0.5) - at) / zoom;
+        self.nav.zoom = zoom;
         self.clamp_view();
     }
 
     pub(super) fn clamp_view(&mut self) {
-        let half = 0.5 / self.zoom;
-        self.center.x = self.center.x.clamp(half, 1.0 - half);
-        self.center.y = self.center.y.clamp(half, 1.0 - half);
+        let half = 0.5 / self.nav.zoom;
+        self.nav.center.x = self.nav.center.x.clamp(half, 1.0 - half);
+        self.nav.center.y = self.nav.center.y.clamp(half, 1.0 - half);
     }
 }
 

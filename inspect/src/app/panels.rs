@@ -238,7 +238,7 @@ impl Inspector {
         self.light_edit = self.light_edit.min(n - 1);
         let l = self.light_edit;
         let mut p = pose.lights[l].position;
-        let speed = self.fly_speed * 0.01;
+        let speed = self.nav.fly_speed * 0.01;
         ui.horizontal(|ui| {
             ui.label(format!("light {l}"));
             for (axis, name) in ["x", "y", "z"].iter().enumerate() {

@@ -17,10 +17,10 @@ impl Inspector {
                 self.zoom_by(0.5, None);
             }
             if ui.button("reset view").clicked() {
-                self.zoom = 1.0;
-                self.center = Vec2::splat(0.5);
+                self.nav.zoom = 1.0;
+                self.nav.center = Vec2::splat(0.5);
             }
-            ui.label(format!("zoom {:.1}x", self.zoom));
+            ui.label(format!("zoom {:.1}x", self.nav.zoom));
         });
         ui.separator();
         let Some(r) = self.result.take() else {
@@ -449,12 +449,12 @@ impl Inspector {
             }
         }
         if resp.dragged() && viewport.is_none() {
-            self.center -= resp.drag_delta() / rect.size() / self.zoom;
+            self.nav.center -= resp.drag_delta() / rect.size() / self.nav.zoom;
             self.clamp_view();
         }
         if resp.double_clicked() {
-            self.zoom = 1.0;
-            self.center = Vec2::splat(0.5);
+            self.nav.zoom = 1.0;
+            self.nav.center = Vec2::splat(0.5);
         } else if resp.clicked()
             && let Some(p) = resp.interact_pointer_pos()
         {
@@ -471,7 +471,7 @@ impl Inspector {
         if let Some(g) = &gizmo {
             let painter = ui.painter().with_clip_rect(rect);
             for (axis, end) in g.ends.iter().enumerate() {
-                let active = self.drag == Some(Drag::Light(axis));
+                let active = self.nav.drag == Some(Drag::Light(axis));
                 painter.line_segment(
                     [g.at, *end],
                     Stroke::new(if active { 4.0 } else { 2.5 }, AXIS_COLORS[axis]),

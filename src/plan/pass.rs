@@ -133,6 +133,9 @@ pub enum Buffer {
     Indirect,
     /// Per pixel, the light of the mirror paths.
     Specular,
+    /// Per pixel, the rays cast on its behalf, by kind (kept with `Options::keep_buffers`,
+    /// for inspection; atomic counters every pass that casts rays for a pixel adds to).
+    PixelRays,
 }
 
 impl Pass {
@@ -161,18 +164,20 @@ impl Pass {
         use Buffer::*;
         match self {
             Pass::BvhBuild => &[Bvh],
-            Pass::Visibility | Pass::VisCull | Pass::VisRaster | Pass::VisResolve => &[Gbuffer, Deferred],
+            Pass::Visibility | Pass::VisCull | Pass::VisRaster | Pass::VisResolve => {
+                &[Gbuffer, Deferred, PixelRays]
+            }
             Pass::MapBuild => &[LightMaps],
             Pass::Classify => &[Decisions, Direct, Points],
             Pass::Borders => &[BorderPairs],
             // The deferred pixels' hits, their decisions by rays and their shading points; the
             // border pairs' decisions; those pixels' direct light again.
-            Pass::ShadowRays => &[Gbuffer, Decisions, Direct, Points],
-            Pass::Direct => &[Direct, Points],
+            Pass::ShadowRays => &[Gbuffer, Decisions, Direct, Points, PixelRays],
+            Pass::Direct => &[Direct, Points, PixelRays],
             Pass::VplGen => &[Vpls],
             Pass::VplMapBuild => &[VplMaps],
-            Pass::Indirect => &[Indirect],
-            Pass::Specular => &[Specular],
+            Pass::Indirect => &[Indirect, PixelRays],
+            Pass::Specular => &[Specular, PixelRays],
         }
     }
 }

@@ -4,7 +4,7 @@
 //! the per-pixel buffers hold one bit per light (`LightBits`), not a screen per light:
 //!
 //! ```text
-//! map_build    light maps: only faces some camera hit falls on; cached until the scene changes
+//! map_build    light maps: only the pages (or faces) camera hits fall on; cached across frames
 //! classify     8x8 tile by tile: the shading points, then per light each point's location and
 //!              map decision -> faces, lit, edge (the 2x2 texel footprint disagrees; its occluder
 //!              hint kept); then the tile's direct light from those decisions
@@ -18,8 +18,8 @@
 //! in L1 while every light decides them; the alternative, a screen-sized buffer per light and a
 //! pass per buffer, spent its time writing and reading those buffers. The occluder hint is kept
 //! for the map-space border pairs alone, as a list per light in pixel order: the only pairs that
-//! need it, and looking the point up in the map again cost each border ray more than the
-//! list's search.
+//! need it, and looking the point up in the map again cost each border ray more than walking
+//! the list beside the rays.
 //!
 //! With `Shadows::Maps` the map's decision is final (no borders, no rays): the pure shadow-map
 //! baseline. Mirror hits have no screen neighbours: they use the map-space test alone

@@ -138,6 +138,27 @@ pub enum Buffer {
     PixelRays,
 }
 
+impl Buffer {
+    /// The buffer's name in the inspector and the docs.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Buffer::Bvh => "bvh",
+            Buffer::Gbuffer => "gbuffer",
+            Buffer::Deferred => "deferred",
+            Buffer::LightMaps => "light_maps",
+            Buffer::Decisions => "decisions",
+            Buffer::BorderPairs => "border_pairs",
+            Buffer::Direct => "direct",
+            Buffer::Points => "points",
+            Buffer::Vpls => "vpls",
+            Buffer::VplMaps => "vpl_maps",
+            Buffer::Indirect => "indirect",
+            Buffer::Specular => "specular",
+            Buffer::PixelRays => "pixel_rays",
+        }
+    }
+}
+
 impl Pass {
     /// The buffers the pass reads: each is written by a pass that runs before it in every plan
     /// that runs it (a test holds the plans to it). `Points` is read where it was made (VPL

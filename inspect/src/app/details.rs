@@ -30,7 +30,10 @@ impl Inspector {
             for (run, d) in
                 r.plan.run.iter().map(|d| (true, d)).chain(r.plan.skipped.iter().map(|d| (false, d)))
             {
-                decision_row(ui, run, d.pass.name(), &d.reason);
+                let names =
+                    |b: &[hyrt::plan::Buffer]| b.iter().map(|b| b.name()).collect::<Vec<_>>().join(", ");
+                let io = format!("reads: {}\nwrites: {}", names(d.pass.reads()), names(d.pass.writes()));
+                decision_row(ui, run, d.pass.name(), &d.reason).on_hover_text(io);
             }
             ui.add_space(4.0);
             if !r.built_while_moving.is_empty() {
@@ -419,7 +422,8 @@ pub(super) fn vec3(v: glam::Vec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z)
 }
 
-pub(super) fn decision_row(ui: &mut egui::Ui, run: bool, what: &str, reason: &str) {
+/// One row of the plan or the frame's decisions; the response is the row's.
+pub(super) fn decision_row(ui: &mut egui::Ui, run: bool, what: &str, reason: &str) -> egui::Response {
     ui.horizontal_wrapped(|ui| {
         let (t, c) = if run {
             ("run ", Color32::from_rgb(110, 210, 110))
@@ -429,7 +433,8 @@ pub(super) fn decision_row(ui: &mut egui::Ui, run: bool, what: &str, reason: &st
         ui.label(RichText::new(t).monospace().color(c));
         ui.label(RichText::new(what).monospace().strong());
         ui.label(reason);
-    });
+    })
+    .response
 }
 
 pub(super) fn swatch(ui: &mut egui::Ui, color: Color32, text: &str) {

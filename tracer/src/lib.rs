@@ -433,7 +433,7 @@ impl Tracer {
     /// prefer if they were the scene: the nearer, ordered as there (by error bounds, then in
     /// `f64`, then the tie key), or the one the ray meets, or `None` (an unknown id counts as
     /// missed). No traversal and not counted as a ray: for a caller that knows the two
-    /// candidates (a rasterized pixel and its [rival](hyrt_raster::Target::rival) in the
+    /// candidates (a rasterized pixel and the rival the z-buffer recorded for it, in the
     /// renderer).
     pub fn nearer_hit(&self, ray: &Ray, a: u32, b: u32) -> Option<Hit> {
         if !ray.origin.is_finite() || !ray.dir.is_finite() {

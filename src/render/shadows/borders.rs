@@ -17,17 +17,11 @@ impl Renderer<'_> {
         let nl = self.lights.len();
         let stride = bufs.faces.stride;
         let (faces, lit, edge) = (&bufs.faces.bits, &bufs.lit.bits, &bufs.edge.bits);
-        bufs.und.stride = stride;
+        // `und` comes from classify cleared, sized as `faces`. The map-space bits are already
+        // limited to pixels with a decision.
         let und = &mut bufs.und.bits;
-        // The map-space bits are already limited to pixels with a decision.
-        match opts.borders {
-            Borders::Laplacian => {
-                und.clear();
-                und.resize(n * stride, 0);
-            }
-            _ => {
-                und.clone_from(edge);
-            }
+        if opts.borders != Borders::Laplacian {
+            und.copy_from_slice(edge);
         }
         if opts.borders != Borders::MapSpace {
             border::laplacian_border_bits(faces, lit, stride, w, h, und);
@@ -35,7 +29,9 @@ impl Renderer<'_> {
         if self.options.keep_buffers {
             bufs.border = (0..nl).map(|l| (0..n).map(|i| bit(&und[i * stride..], l)).collect()).collect();
         }
-        // Then only the pixels with a decision.
-        border::dilate_bits(und, Some(faces), stride, w, h, opts.dilate as usize);
+        // Then only the pixels with a decision (a border without dilation has no others).
+        if opts.dilate > 0 {
+            border::dilate_bits(und, Some(faces), stride, w, h, opts.dilate as usize);
+        }
     }
 }

@@ -295,6 +295,11 @@ pub struct ShadowOptions {
     /// Paged maps: most megabytes of pages per light; a light whose receivers ask for more
     /// gets coarser levels, one at a time, until it fits.
     pub map_budget: u32,
+    /// Paged maps with border rays: the frames a light's map is expected to serve. A light whose
+    /// map is predicted to cost more than the shadow rays it saves over that many frames gets
+    /// none: rays decide its pairs, as the reference's do (`shadows::payoff`). Infinite (the
+    /// default): every light gets its map. `hyrt render`, which renders one image, uses 1.
+    pub map_horizon: f32,
     /// Depth margin in texel footprints (see `hyrt_shadowmap::classify`).
     pub bias: f32,
     pub borders: Borders,
@@ -316,6 +321,7 @@ impl Default for ShadowOptions {
             light_maps: LightMaps::Paged,
             map_detail: 1.5,
             map_budget: 10,
+            map_horizon: f32::INFINITY,
             bias: 1.0,
             borders: Borders::MapSpace,
             dilate: 0,
@@ -563,6 +569,13 @@ pub const KNOBS: &[Knob] = &[
         "Paged light maps: most megabytes of pages per light (coarser levels beyond it).",
         count 1..=65536,
         shadow.map_budget, slider 1..=256
+    ),
+    knob!(
+        "map-horizon",
+        "FRAMES",
+        "Paged light maps with border rays: frames each light's map is expected to serve; a light whose map would cost more than the shadow rays it saves over that many frames gets none, and rays decide it (`inf`: every light gets its map; `hyrt render`, one image, uses 1).",
+        positive_or_inf,
+        shadow.map_horizon
     ),
     knob!("bias", "B", "Depth margin of map decisions, in texel footprints.", non_negative, shadow.bias, slider 0.0..=4.0),
     knob!(

@@ -170,7 +170,12 @@ fn render(a: &RenderArgs) -> Result<()> {
     let outputs: Vec<&Path> = png.iter().chain(&a.exr).chain(&a.stats).map(PathBuf::as_path).collect();
     output::check_outputs(&outputs)?;
 
-    let options = a.knobs.options_for(&scene)?;
+    // One image: a light map must pay for itself within this frame (unless told otherwise).
+    let mut knobs = a.knobs.clone();
+    if knobs.given("map-horizon").is_none() {
+        knobs.set("map-horizon", "1")?;
+    }
+    let options = knobs.options_for(&scene)?;
     let mut renderer = Renderer::new(&scene, options);
     // Not the BVH's build time yet: asking for it waits for a background build.
     say(format!(
@@ -293,9 +298,16 @@ fn vs_reference(
     film: &hyrt::film::Film,
     quiet: bool,
 ) -> Result<(VsReference, FirstFrame)> {
+    // The cold first frame is this command's one image; warm frames are a viewer's, whose maps
+    // serve every frame (an infinite horizon).
     let hybrid = *renderer.options();
-    let reference = hybrid.reference_for();
-    let bar = progress_bar(2 * (VS_FRAMES + COLD_FRAMES) as u64 + 1, "frames", quiet);
+    let warm = hyrt::render::Options {
+        shadow: hyrt::render::ShadowOptions { map_horizon: f32::INFINITY, ..hybrid.shadow },
+        ..hybrid
+    };
+    // From `warm`: switching between the two then keeps the maps (`Renderer::set_options`).
+    let reference = warm.reference_for();
+    let bar = progress_bar(2 * (VS_FRAMES + COLD_FRAMES) as u64 + 2, "frames", quiet);
     bar.set_message("first frames, cold");
     let first = cold_first_frames(renderer.scene, hybrid, reference, &|| bar.inc(1));
     bar.set_message("the reference");
@@ -304,8 +316,10 @@ fn vs_reference(
     bar.inc(1);
     bar.set_message("warm frames");
     let (mut h, mut r) = (Vec::new(), Vec::new());
+    renderer.set_options(warm);
+    renderer.render(&|| {});
     for _ in 0..VS_FRAMES {
-        for (o, times) in [(hybrid, &mut h), (reference, &mut r)] {
+        for (o, times) in [(warm, &mut h), (reference, &mut r)] {
             renderer.set_options(o);
             times.push(renderer.render(&|| {}).stats.total_ms);
             bar.inc(1);

@@ -292,13 +292,15 @@ fn raster_visibility_from_the_cli() {
 }
 
 /// `--preset hybrid` selects raster visibility and SMeRTS, explicit flags override it, the
-/// stats carry the per-light decisions and the new passes, and bad knob values are refused.
+/// stats carry the per-light decisions and the new passes, and bad knob values are refused
+/// (with every light's map: `--map-horizon inf`).
 #[test]
 fn smerts_presets_and_knobs_from_the_cli() {
     let d = out_dir("smerts_cli");
     let (stats, png) = (d.join("s.json"), d.join("c.png"));
     let run = |extra: &[&str]| {
-        let mut args = vec!["render", "cornell", "--size", "64x48", "-q", "--preset", "hybrid"];
+        let mut args =
+            vec!["render", "cornell", "--size", "64x48", "-q", "--preset", "hybrid", "--map-horizon", "inf"];
         args.extend_from_slice(extra);
         args.extend_from_slice(&["-o", png.to_str().unwrap(), "--stats", stats.to_str().unwrap()]);
         let (ok, _, err) = hyrt(&args);
@@ -659,14 +661,56 @@ fn first_frame_numbers(line: &str) -> Option<[f64; 4]> {
     Some([w[0].parse().ok()?, w[3].parse().ok()?, w[7].parse().ok()?, ratio.parse().ok()?])
 }
 
+/// `hyrt render` renders one image: a light map must pay for itself within it (`--map-horizon`
+/// 1, unless given); each light's decision says which it got and why.
+#[test]
+fn one_image_renders_give_maps_only_where_they_pay_in_it() {
+    let d = out_dir("one_image");
+    let (png, stats) = (d.join("c.png"), d.join("s.json"));
+    for (extra, horizon) in
+        [(&[][..], serde_json::json!(1.0)), (&["--map-horizon", "inf"][..], serde_json::json!("inf"))]
+    {
+        let args = ["render", "cornell", "--size", "64x48", "-q", "-o", png.to_str().unwrap(), "--stats"];
+        let (ok, _, err) = hyrt(&[&args[..], &[stats.to_str().unwrap()], extra].concat());
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_slice(&read(&stats)).unwrap();
+        assert_eq!(v["options"]["map_horizon"], horizon, "{extra:?}");
+        let lights: Vec<&serde_json::Value> = v["frame_decisions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|d| d["what"].as_str().unwrap().starts_with("light"))
+            .collect();
+        assert_eq!(lights.len(), 2, "{v}");
+        for d in lights {
+            let r = d["reason"].as_str().unwrap();
+            // The tiny test box's maps do not pay in one frame; with an infinite horizon
+            // every light gets its map.
+            let want = if extra.is_empty() { "no map, shadow rays: " } else { "map built: " };
+            assert!(r.starts_with(want), "{extra:?}: {r}");
+        }
+    }
+}
+
 /// `hyrt render` without a preset renders the hybrid; `--vs-reference` also renders the
 /// reference and reports the speed-up and the PSNR, and the first frame of each on a fresh
-/// renderer, on the terminal and in the stats; the stats total the light maps.
+/// renderer, on the terminal and in the stats; the stats total the light maps (with every
+/// light's map: `--map-horizon inf`).
 #[test]
 fn render_defaults_to_the_hybrid_and_compares_with_the_reference() {
     let d = out_dir("vs_reference");
     let (png, stats) = (d.join("c.png"), d.join("s.json"));
-    let args = ["render", "cornell", "--size", "64x48", "--vs-reference", "-o", png.to_str().unwrap()];
+    let args = [
+        "render",
+        "cornell",
+        "--size",
+        "64x48",
+        "--vs-reference",
+        "--map-horizon",
+        "inf",
+        "-o",
+        png.to_str().unwrap(),
+    ];
     let (ok, _, err) = hyrt(&[&args[..], &["--stats", stats.to_str().unwrap()]].concat());
     assert!(ok, "{err}");
     assert!(err.contains("vs the reference: ") && err.contains("faster, PSNR "), "{err}");

@@ -88,6 +88,20 @@ impl Plan {
                     n = sh.map.resolution
                 )
             };
+            // A finite horizon: maps only where they pay (`render::shadows::payoff`).
+            let pays = paged && sh.map_horizon.is_finite() && opts.shadows == Shadows::Smerts;
+            let maps = if pays {
+                let frames = if sh.map_horizon == 1.0 {
+                    "1 frame".to_string()
+                } else {
+                    format!("{} frames", sh.map_horizon)
+                };
+                format!(
+                    "{maps}; only for the lights whose maps are predicted to pay within {frames} (the others: a shadow ray per pixel, per frame)"
+                )
+            } else {
+                maps
+            };
             let maps = match (cut, paged && sh.cutouts == crate::options::CutoutMaps::Texels) {
                 (0, _) => maps,
                 (n, true) => format!(
@@ -120,8 +134,10 @@ impl Plan {
                             Pass::Borders,
                             format!("{} borders, dilated by {} px", sh.borders.name(), sh.dilate),
                         );
+                        let without =
+                            if pays { "; and one per pixel for each light without a map" } else { "" };
                         plan.run(Pass::ShadowRays,
-                            "one shadow ray per border pixel and light, occluder hint first; those pixels shaded again".into(),
+                            format!("one shadow ray per border pixel and light, occluder hint first; those pixels shaded again{without}"),
                         );
                     } else {
                         plan.skip(Pass::Borders, "shadows by maps alone: no borders, no rays".into());

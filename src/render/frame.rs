@@ -49,7 +49,7 @@ impl Renderer<'_> {
             })
         });
         if let Some(s) = &mut shadowing {
-            run.pass(Pass::Borders, |_| self.borders(&mut s.bufs, w as usize, h as usize));
+            run.pass(Pass::Borders, |_| self.borders(&mut s.bufs, w as usize, h as usize, &s.by_rays));
             let check = self.options.check_visibility;
             let traced = run.pass(Pass::ShadowRays, |run| {
                 if !deferred.is_empty() {
@@ -57,6 +57,7 @@ impl Renderer<'_> {
                     s.add_ray_pixels(self, &gbuffer, &deferred, points.as_deref_mut());
                 }
                 run.stats.rays += s.trace(self, &gbuffer, &mut direct);
+                run.stats.rays += s.trace_without_maps(self, &gbuffer, &mut direct, points.as_deref_mut());
                 s.finish(self, &gbuffer, check);
             });
             if traced.is_none() {
@@ -154,7 +155,7 @@ impl Renderer<'_> {
         let maps = self.map_build(gbuffer, &mut super::FrameStats::default());
         let mut s = self.classify(gbuffer, maps, direct, points, &|| {});
         let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
-        self.borders(&mut s.bufs, w, h);
+        self.borders(&mut s.bufs, w, h, &s.by_rays.clone());
         if trace {
             s.trace(self, gbuffer, direct);
         }

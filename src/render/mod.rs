@@ -217,6 +217,7 @@ impl<'a> Renderer<'a> {
             || a.light_maps != b.light_maps
             || a.map_detail != b.map_detail
             || a.map_budget != b.map_budget
+            || a.map_horizon != b.map_horizon
             || a.cutouts != b.cutouts
         {
             // Which pages (or faces) the view needs depends on all of these but the resolution
@@ -224,7 +225,8 @@ impl<'a> Renderer<'a> {
             let needs = a.map.kind != b.map.kind
                 || a.light_maps != b.light_maps
                 || a.map_detail != b.map_detail
-                || a.map_budget != b.map_budget;
+                || a.map_budget != b.map_budget
+                || a.map_horizon != b.map_horizon;
             self.drop_light_maps(needs);
             dropped.push("light maps");
         }

@@ -69,7 +69,7 @@ impl Renderer<'_> {
         let lights = &self.lights;
         let nl = lights.len();
         let mut bufs = std::mem::take(&mut *self.maps.scratch.lock().unwrap_or_else(|e| e.into_inner()));
-        let FrameMaps { maps, page_counts, .. } = maps;
+        let FrameMaps { maps, page_counts, by_rays, .. } = maps;
         let resolution: Vec<Resolution> = if self.paged_maps() {
             self.maps.needed.get().map_or_else(Vec::new, |n| n.resolution.clone())
         } else {
@@ -92,6 +92,7 @@ impl Renderer<'_> {
         bufs.und.reset(n, nl);
         bufs.border.clear();
         let stride = bufs.faces.stride;
+        let no_map = !by_rays.is_empty() && by_rays.iter().all(|&b| b);
         let band = (TILE * w).max(1);
         let bands = direct
             .par_chunks_mut(band)
@@ -106,6 +107,12 @@ impl Renderer<'_> {
             let mut counts = vec![MapCounts::default(); nl];
             // Per light, the band's map-space borders and their occluder hints.
             let mut hints: Vec<Vec<BorderHint>> = vec![Vec::new(); nl];
+            // No light with a map: nothing to decide; the ray pass shades every pixel and
+            // makes the shading points (`Shadowing::trace_without_maps`).
+            if no_map {
+                (0..rows).for_each(|_| progress());
+                return BandOut { counts, hints };
+            }
             // Per tile: the shading points and the lights they face, then per light every
             // point's location and decision, then the points' direct light from those
             // decisions. (Prefetching the located points' texels before deciding them measured
@@ -143,6 +150,12 @@ impl Renderer<'_> {
                         // geometry kept for the shading below.
                         let seen = seen_winding(&s, tri);
                         for (l, light) in lights.iter().enumerate() {
+                            // A light without a map: the ray pass decides and shades it.
+                            if by_rays[l] {
+                                terms.push(LightTerms { r: 0.0, cos_light: 0.0 });
+                                geo.push(None);
+                                continue;
+                            }
                             let (g, t) = light_geometry_and_terms(&s, light);
                             terms.push(t);
                             if g.is_some() && on_viewer_side(seen, sd[l]) {
@@ -175,6 +188,9 @@ impl Renderer<'_> {
                         .then(|| [0, H - 1, H * H - H, H * H - 1].map(|i| tile[quarter(q, i)].1.p))
                 });
                 for (l, c) in cls.iter().enumerate() {
+                    if by_rays[l] {
+                        continue;
+                    }
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
                     levels.clear();
                     levels.extend(recv.iter().enumerate().map(|(k, &f)| level(l, f, terms[k * nl + l])));
@@ -283,6 +299,6 @@ impl Renderer<'_> {
             })
             .collect();
         let (added, und_counts) = (vec![0; nl], vec![RayCounted::default(); nl]);
-        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, und_counts, hints }
+        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, und_counts, hints, by_rays }
     }
 }

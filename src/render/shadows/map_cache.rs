@@ -25,6 +25,9 @@ pub(crate) struct MapCache {
     pub(super) moved: Mutex<Vec<bool>>,
     /// Buffers of the last frame, reused (allocating them afresh costs page faults).
     pub(super) scratch: Mutex<ShadowBuffers>,
+    /// Whether a frame has asked for maps: the first one's BVH is still being built
+    /// (`payoff`).
+    pub(super) framed: std::sync::atomic::AtomicBool,
 }
 
 /// A paged light map's pages to draw for a frame ([`Renderer::light_maps`]).
@@ -49,6 +52,8 @@ pub(crate) struct FrameMaps {
     pub(super) decisions: Vec<FrameDecision>,
     /// Paged maps: per light, the pages in use and those drawn for this frame.
     pub(super) page_counts: Vec<[u32; 2]>,
+    /// Per light, whether shadow rays decide it this frame (no map).
+    pub(super) by_rays: Vec<bool>,
 }
 
 impl Renderer<'_> {
@@ -66,7 +71,20 @@ impl Renderer<'_> {
         let kind = self.options.shadow.map.kind;
         let nf = LightMap::face_count(kind);
         let lights = &self.lights;
-        let needed = self.maps.needed.get_or_init(|| self.needs(gbuffer));
+        let needed = self.maps.needed.get_or_init(|| {
+            let have: Vec<bool> = (0..self.lights.len())
+                .map(|l| {
+                    self.maps
+                        .maps
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .get(l)
+                        .is_some_and(|m| m.as_ref().is_some_and(|m| m.page_count() > 0))
+                })
+                .collect();
+            self.needs(gbuffer, &have, !self.maps.framed.load(std::sync::atomic::Ordering::Relaxed))
+        });
+        self.maps.framed.store(true, std::sync::atomic::Ordering::Relaxed);
         let paged = self.paged_maps();
         let budget_bytes = self.options.shadow.map_budget as usize * (1 << 20);
         let fits = |pages: usize| hyrt_shadowmap::paged_memory_bound(pages) <= budget_bytes;
@@ -79,12 +97,29 @@ impl Renderer<'_> {
         let mut built = 0;
         let mut decisions = Vec::with_capacity(lights.len());
         let mut jobs: Vec<PageJob> = Vec::new();
+        let mut by_rays = vec![false; lights.len()];
         for (l, light) in lights.iter().enumerate() {
+            let what = Subject::Light(l);
+            // A light whose map would not pay for itself over the horizon: rays decide it.
+            if let (Some(true), Some(Some(p))) = (needed.by_rays.get(l), needed.payoff.get(l)) {
+                by_rays[l] = true;
+                if cache[l].is_none() {
+                    cache[l] = Some(Arc::new(LightMap::build_pages(
+                        &self.scene.positions,
+                        light.position,
+                        &self.options.shadow.map,
+                        &[],
+                        &[],
+                    )));
+                }
+                let why = p.why(self.options.shadow.map_horizon);
+                decisions.push(FrameDecision::new(what, Run::Run, format!("no map, shadow rays: {why}")));
+                continue;
+            }
             let want = &needed.faces[l * nf..(l + 1) * nf];
             let have = cache[l].as_ref().map(|m| m.faces_drawn().to_vec());
             let missing = have.as_ref().is_none_or(|h| want.iter().zip(h).any(|(w, h)| *w && !*h));
             let wanted = want.iter().filter(|&&w| w).count();
-            let what = Subject::Light(l);
             if wanted == 0 {
                 let why = if light.intensity.max_element() <= 0.0 {
                     "zero intensity"
@@ -164,7 +199,11 @@ impl Renderer<'_> {
                     )
                 } else {
                     let why = if was_moved { "map rebuilt: the light moved" } else { "map built" };
-                    (Cache::Built, format!("{why}: {} page(s) drawn", draw.len()))
+                    let pays =
+                        needed.payoff.get(l).copied().flatten().map_or(String::new(), |p| {
+                            format!(" ({})", p.why(self.options.shadow.map_horizon))
+                        });
+                    (Cache::Built, format!("{why}: {} page(s) drawn{pays}", draw.len()))
                 };
                 // Drawn below, with the other lights' pages.
                 jobs.push(PageJob { light: l, draw, why, in_use, decision: decisions.len() });
@@ -263,6 +302,7 @@ impl Renderer<'_> {
             built,
             decisions,
             page_counts,
+            by_rays,
         }
     }
 

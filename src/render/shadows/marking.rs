@@ -9,6 +9,7 @@ use hyrt_shadowmap::{
 use hyrt_tracer::Hit;
 use rayon::prelude::*;
 
+use super::payoff::{COSTS, LightLoad, Payoff, choose};
 use crate::render::light::{facing, outside_with_margin};
 use crate::render::{Renderer, Shadows, SurfaceHit};
 
@@ -21,6 +22,10 @@ pub(crate) struct Needs {
     /// they were marked with (empty for whole maps).
     pub(super) pages: Vec<Vec<PageKey>>,
     pub(super) resolution: Vec<Resolution>,
+    /// Paged maps with a finite horizon: per light, what its map and its rays would cost
+    /// (`payoff`), and whether rays decide it (no map, no pages marked).
+    pub(super) payoff: Vec<Option<Payoff>>,
+    pub(super) by_rays: Vec<bool>,
 }
 
 /// The level guide of paged maps for `camera` (`hyrt_shadowmap::paged`): a pixel subtends
@@ -48,6 +53,14 @@ const MARK_STEP: usize = 2;
 /// not fit the budget at their own levels ([`Renderer::needs`]).
 const COARSER: usize = 3;
 
+/// The payoff estimate (`payoff`) marks one camera hit in `ESTIMATE_STEP x ESTIMATE_STEP`:
+/// a sixteenth of the marking's work, for the counts of a decision whose error bars are wider.
+const ESTIMATE_STEP: usize = 8;
+
+/// One band of rows' marks: per light and guide its packed page keys, and per light the
+/// receivers that face it.
+type BandMarks = (Vec<Vec<Vec<u64>>>, Vec<u64>);
+
 impl Renderer<'_> {
     /// What marking needs of the camera hit of pixel `i` (where direct light is computed at
     /// all): its position, geometric normal (not flipped to the viewer) and the unit direction
@@ -67,24 +80,62 @@ impl Renderer<'_> {
     /// refinement for grazing light first, then has its finest levels capped, a level at a
     /// time, until they fit (the receivers that need the finest texels give them up first;
     /// the others keep theirs).
-    pub(super) fn needs(&self, gbuffer: &[Option<Hit>]) -> Needs {
+    ///
+    /// With a finite [`map_horizon`](crate::render::ShadowOptions::map_horizon) (and border
+    /// rays), first the payoff of each light's map (`payoff`) from a sparse sample of the hits:
+    /// a light whose map does not pay, and that has none already (`have_map`), gets no pages;
+    /// rays decide it. `first_frame`: the BVH is still being built.
+    pub(super) fn needs(&self, gbuffer: &[Option<Hit>], have_map: &[bool], first_frame: bool) -> Needs {
         if !self.paged_maps() {
             return Needs { faces: self.needed_faces(gbuffer), ..Needs::default() };
         }
         let nl = self.lights.len();
+        let horizon = self.options.shadow.map_horizon;
         let budget_bytes = self.options.shadow.map_budget as usize * (1 << 20);
         let fits = |pages: usize| hyrt_shadowmap::paged_memory_bound(pages) <= budget_bytes;
         let guide = resolution_guide(&self.camera, &self.options.shadow);
         let unrefined = Resolution { min_cos_light: 1.0, ..guide };
+        // With a horizon, first a sparse estimate: its pages (the fewer of the two guides',
+        // which the marking below chooses between) are a lower bound of what a map needs, so
+        // the lights that get no map even with them are decided here, unmarked. A light with
+        // a map already builds nothing.
+        let pay = horizon.is_finite() && self.options.shadows == Shadows::Smerts;
+        let horizon = f64::from(horizon);
+        let first = first_frame.then_some((self.scene.positions.len(), gbuffer.len()));
+        let mut receivers = vec![0u64; nl];
+        let mut by_rays = vec![false; nl];
+        let mut payoff: Vec<Option<Payoff>> = vec![None; nl];
+        if pay {
+            let all: Vec<usize> = (0..nl).collect();
+            let (sets, counted) =
+                self.mark_pages(gbuffer, &all, &vec![vec![guide, unrefined]; nl], ESTIMATE_STEP);
+            let area = (ESTIMATE_STEP * ESTIMATE_STEP) as u64;
+            receivers = counted.iter().map(|&r| r * area).collect();
+            let least: Vec<LightLoad> = (0..nl)
+                .map(|l| {
+                    let pages = if have_map[l] { 0 } else { sets[l].iter().map(Vec::len).min().unwrap_or(0) };
+                    LightLoad { pages: pages as u64, receivers: receivers[l] }
+                })
+                .collect();
+            let p = choose(&least, horizon, first, &COSTS);
+            // (A light the sample finds no receiver for is left to the marking: none may face it.)
+            by_rays = p.iter().zip(&receivers).map(|(p, &r)| !p.map && r > 0).collect();
+            // The decided lights' reason: the estimate's (a lower bound of the build).
+            payoff = p
+                .into_iter()
+                .zip(&by_rays)
+                .map(|(p, &r)| r.then_some(Payoff { at_least: true, ..p }))
+                .collect();
+        }
         let mut resolution = vec![guide; nl];
         let mut pages = vec![Vec::new(); nl];
         // One pass over the hits marks every light with and without the refinement for grazing
         // light (a light over the budget with it mostly fits without); then, for the lights that
         // still do not fit, several caps at once, until one fits.
         let mut variants: Vec<Vec<Resolution>> = vec![vec![guide, unrefined]; nl];
-        let mut todo: Vec<usize> = (0..nl).collect();
+        let mut todo: Vec<usize> = (0..nl).filter(|&l| !by_rays[l]).collect();
         while !todo.is_empty() {
-            let marked = self.mark_pages(gbuffer, &todo, &variants);
+            let (marked, _) = self.mark_pages(gbuffer, &todo, &variants, MARK_STEP);
             let mut next = Vec::new();
             for (&l, sets) in todo.iter().zip(marked) {
                 // The first variant that fits; else the finest level of the last one tried
@@ -107,34 +158,62 @@ impl Renderer<'_> {
             }
             todo = next;
         }
+        // Then the same choice among the lights left, with their marked pages: those it gives
+        // no map lose their pages.
+        if pay {
+            let left: Vec<usize> = (0..nl).filter(|&l| !by_rays[l]).collect();
+            let loads: Vec<LightLoad> = left
+                .iter()
+                .map(|&l| {
+                    let pages = if have_map[l] { 0 } else { pages[l].len() };
+                    LightLoad { pages: pages as u64, receivers: receivers[l] }
+                })
+                .collect();
+            let chosen = choose(&loads, horizon, first, &COSTS);
+            let maps = chosen.iter().filter(|p| p.map).count();
+            for (&l, p) in left.iter().zip(chosen) {
+                if receivers[l] == 0 {
+                    continue;
+                }
+                payoff[l] = Some(Payoff { lights: nl, ..p });
+                if !p.map {
+                    by_rays[l] = true;
+                    pages[l].clear();
+                }
+            }
+            payoff.iter_mut().flatten().for_each(|p| p.maps = maps);
+        }
         let nf = LightMap::face_count(MapKind::Cube);
         let mut faces = vec![false; nl * nf];
         for (l, p) in pages.iter().enumerate() {
             p.iter().for_each(|k| faces[l * nf + usize::from(k.face)] = true);
         }
-        Needs { faces, pages, resolution }
+        Needs { faces, pages, resolution, payoff, by_rays }
     }
 
     /// For each light `l` of `lights` and each level guide of `variants[l]`, the pages (sorted)
     /// under the camera hits that face it ([`pages_around`]) at the levels that guide gives
-    /// them: one pass over the hits for several guides.
+    /// them: one pass over the hits for several guides. Only one hit in `step x step` is marked
+    /// under border rays (rays decide what the sample misses; every hit for maps alone). Also,
+    /// per light, how many of those hits face it.
     fn mark_pages(
         &self,
         gbuffer: &[Option<Hit>],
         lights: &[usize],
         variants: &[Vec<Resolution>],
-    ) -> Vec<Vec<Vec<PageKey>>> {
+        step: usize,
+    ) -> (Vec<Vec<Vec<PageKey>>>, Vec<u64>) {
         let w = self.scene.settings.width.max(1) as usize;
-        // A sample of the hits where rays decide what it misses; every hit for maps alone.
-        let step = if self.options.shadows == Shadows::Smerts { MARK_STEP } else { 1 };
+        let step = if self.options.shadows == Shadows::Smerts { step } else { 1 };
         // The receiver's factor is the same for every light and guide (one camera).
         let guide = lights.first().and_then(|&l| variants[l].first()).copied();
         // Bands of rows in parallel, each marking packed keys with neighbours' repeats skipped;
         // then per light and guide one sort of all the bands' keys.
         const ROWS: usize = 8;
-        let bands: Vec<Vec<Vec<Vec<u64>>>> = (0..gbuffer.len().div_ceil(w * ROWS))
+        let bands: Vec<BandMarks> = (0..gbuffer.len().div_ceil(w * ROWS))
             .into_par_iter()
             .map(|b| {
+                let mut receivers = vec![0u64; lights.len()];
                 let mut marks: Vec<Vec<Vec<u64>>> =
                     lights.iter().map(|&l| vec![Vec::new(); variants[l].len()]).collect();
                 let mut lasts: Vec<Vec<Option<PageRect>>> =
@@ -159,6 +238,7 @@ impl Renderer<'_> {
                         {
                             continue;
                         }
+                        receivers[k] += 1;
                         let terms = LightTerms::of(p, ng, light.position);
                         let mut c: Option<MapCoord> = None;
                         for ((g, out), last) in variants[l].iter().zip(&mut marks[k]).zip(&mut lasts[k]) {
@@ -183,22 +263,25 @@ impl Renderer<'_> {
                         }
                     }
                 }
-                marks
+                (marks, receivers)
             })
             .collect();
-        (0..lights.len())
+        let receivers = (0..lights.len()).map(|k| bands.iter().map(|b| b.1[k]).sum()).collect();
+        let sets = (0..lights.len())
             .into_par_iter()
             .map(|k| {
                 (0..variants[lights[k]].len())
                     .map(|j| {
-                        let mut all: Vec<u64> = bands.iter().flat_map(|r| r[k][j].iter().copied()).collect();
+                        let mut all: Vec<u64> =
+                            bands.iter().flat_map(|r| r.0[k][j].iter().copied()).collect();
                         all.sort_unstable();
                         all.dedup();
                         all.into_iter().map(PageKey::unpack).collect()
                     })
                     .collect()
             })
-            .collect()
+            .collect();
+        (sets, receivers)
     }
 
     /// Per light and face (light-major), whether a camera hit the light faces falls on it.

@@ -4,14 +4,16 @@
 //! the per-pixel buffers hold one bit per light (`LightBits`), not a screen per light:
 //!
 //! ```text
-//! map_build    light maps: only the pages (or faces) camera hits fall on; cached across frames
+//! map_build    light maps: only the pages (or faces) camera hits fall on; cached across frames;
+//!              with a finite horizon, only for the lights whose maps pay for themselves in it
 //! classify     8x8 tile by tile: the shading points, then per light each point's location and
 //!              map decision -> faces, lit, edge (the 2x2 texel footprint disagrees; its occluder
 //!              hint kept); then the tile's direct light from those decisions
 //! borders      (Smerts) und = dilate(edge and/or laplacian(lit, faces), R), byte ops over 8 lights
 //! shadow_rays  the undecided (pixel, light) pairs listed light by light, in screen order: a
 //!              shadow ray each (the hint classify kept first), in fixed chunks; the
-//!              answers into lit, and the direct light of those pixels again
+//!              answers into lit, and the direct light of those pixels again; then, for the
+//!              lights without a map, a shadow ray per pixel facing them, streamed by rows
 //! ```
 //!
 //! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points
@@ -26,17 +28,20 @@
 //! ([`Shadowing::visible_at`]).
 //!
 //! One concept per file: `marking` (which pages or faces a view needs, at what level),
-//! `map_cache` (the maps kept between frames), `classify`, `borders`, `border_rays` (the
-//! passes), `mirror_hits` (decisions at mirror hits), `lookup` (a point's decision in one map);
-//! this file holds the per-pixel buffers and counts the passes share.
+//! `payoff` (which lights get a map at all), `map_cache` (the maps kept between frames),
+//! `classify`, `borders`, `border_rays`, `light_rays` (the passes), `mirror_hits` (decisions at
+//! mirror hits), `lookup` (a point's decision in one map); this file holds the per-pixel
+//! buffers and counts the passes share.
 
 mod border_rays;
 mod borders;
 mod classify;
+mod light_rays;
 mod lookup;
 mod map_cache;
 mod marking;
 mod mirror_hits;
+mod payoff;
 
 use std::sync::Arc;
 
@@ -211,6 +216,8 @@ pub struct Shadowing<'r> {
     /// hints ([`Lookup::hint`]), as the classify pass found them: a border ray tests that
     /// triangle first without looking the point up again.
     hints: Vec<Vec<BorderHint>>,
+    /// Per light, whether shadow rays decide it this frame (no map).
+    pub(crate) by_rays: Vec<bool>,
 }
 
 /// A map-space border pair's pixel and the occluder hint its map lookup found.
@@ -286,6 +293,13 @@ fn per_light<T: Send>(lights: usize, n: usize, f: impl Fn(usize, usize) -> T + S
 }
 
 /// Per-light counts of parts (bands, rows) summed in order, for `lights` lights.
+/// The per-pixel byte mask (`stride` bytes) of the lights `l` with `set[l]`.
+fn light_mask(set: &[bool], stride: usize) -> Vec<u8> {
+    let mut m = vec![0u8; stride];
+    set.iter().enumerate().filter(|(_, s)| **s).for_each(|(l, _)| m[l / 8] |= 1 << (l % 8));
+    m
+}
+
 fn sum_per_light<T: Copy + Default + std::ops::AddAssign>(parts: Vec<Vec<T>>, lights: usize) -> Vec<T> {
     let mut sum = vec![T::default(); lights];
     for part in parts {
@@ -333,6 +347,13 @@ impl std::ops::AddAssign for MapCounts {
 struct RayCounted {
     rays: u64,
     map_lit: u64,
+}
+
+impl std::ops::AddAssign for RayCounted {
+    fn add_assign(&mut self, o: Self) {
+        self.rays += o.rays;
+        self.map_lit += o.map_lit;
+    }
 }
 
 /// One light's decisions that a plain shadow ray contradicts, by who made them.

@@ -53,9 +53,18 @@ const MARK_STEP: usize = 2;
 /// not fit the budget at their own levels ([`Renderer::needs`]).
 const COARSER: usize = 3;
 
-/// The payoff estimate (`payoff`) marks one camera hit in `ESTIMATE_STEP x ESTIMATE_STEP`:
-/// a sixteenth of the marking's work, for the counts of a decision whose error bars are wider.
-const ESTIMATE_STEP: usize = 8;
+/// The payoff estimate (`payoff`) marks one camera hit in `s x s`, `s` the least power of two
+/// from 8 at which it marks at most `ESTIMATE_MARKS` (hit, light) pairs: a sixteenth of the
+/// marking's work or less, for the counts of a decision whose error bars are wider (with many
+/// lights, the estimate would otherwise cost a good part of what it decides).
+fn estimate_step(hits: usize, lights: usize) -> usize {
+    const ESTIMATE_MARKS: usize = 1 << 17;
+    let mut s = 8;
+    while s < 64 && hits / (s * s) * lights > ESTIMATE_MARKS {
+        s *= 2;
+    }
+    s
+}
 
 /// One band of rows' marks: per light and guide its packed page keys, and per light the
 /// receivers that face it.
@@ -107,9 +116,9 @@ impl Renderer<'_> {
         let mut payoff: Vec<Option<Payoff>> = vec![None; nl];
         if pay {
             let all: Vec<usize> = (0..nl).collect();
-            let (sets, counted) =
-                self.mark_pages(gbuffer, &all, &vec![vec![guide, unrefined]; nl], ESTIMATE_STEP);
-            let area = (ESTIMATE_STEP * ESTIMATE_STEP) as u64;
+            let step = estimate_step(gbuffer.len(), nl);
+            let (sets, counted) = self.mark_pages(gbuffer, &all, &vec![vec![guide, unrefined]; nl], step);
+            let area = (step * step) as u64;
             receivers = counted.iter().map(|&r| r * area).collect();
             let least: Vec<LightLoad> = (0..nl)
                 .map(|l| {

@@ -155,7 +155,7 @@ impl Renderer<'_> {
         let maps = self.map_build(gbuffer, &mut super::FrameStats::default());
         let mut s = self.classify(gbuffer, maps, direct, points, &|| {});
         let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
-        self.borders(&mut s.bufs, w, h, &s.by_rays.clone());
+        self.borders(&mut s.bufs, w, h, &s.by_rays);
         if trace {
             s.trace(self, gbuffer, direct);
         }

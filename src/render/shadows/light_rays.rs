@@ -6,9 +6,9 @@ use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
 use super::{RayCounted, Shadowing, sum_per_light};
+use crate::render::Renderer;
 use crate::render::gather::ShadePoint;
 use crate::render::light::{PlaneSides, light_geometry, reflect, viewer_side};
-use crate::render::{Renderer, SurfaceHit};
 
 /// One row's direct light, and its face, lit and undecided bits.
 type RowBufs<'a> = (&'a mut [Vec3], (&'a mut [u8], (&'a mut [u8], &'a mut [u8])));
@@ -40,62 +40,45 @@ impl Shadowing<'_> {
         let row = |y: usize, (out, (faces, (lit, und))): RowBufs, mut pts: Option<&mut [ShadePoint]>| {
             let mut c = RayCounts::default();
             let mut counted = vec![RayCounted::default(); nl];
-            // The row's shading points, and per pixel the pairs this pass decides: the lights
-            // without a map that face it (`facing`, the plane side of each light kept for the
-            // row's last triangle, as the reference's direct pass does), unless a border ray
-            // decided and shaded them already (a deferred pixel).
+            // `facing`, the plane side of each light kept for the row's last triangle (as the
+            // reference's direct pass does).
             let mut sides = PlaneSides::new();
-            let mut points: Vec<Option<SurfaceHit>> = Vec::with_capacity(out.len());
-            let mut mine = vec![0u8; out.len() * stride];
-            for x in 0..out.len() {
-                let s = r.shading_point(gbuffer, y * w + x);
-                if let Some(s) = &s {
-                    if let Some(pts) = pts.as_deref_mut()
-                        && r.diffuse(s.tri)
-                    {
-                        pts[x] = ShadePoint::of(s);
-                    }
-                    let tri = &r.scene.positions[s.tri as usize];
-                    let sides = sides.of(s.tri, tri, &r.lights);
-                    for (l, light) in r.lights.iter().enumerate() {
-                        let (byte, m) = (x * stride + l / 8, 1u8 << (l % 8));
-                        if by_rays[l]
-                            && und[byte] & m == 0
-                            && light_geometry(s, light).is_some()
-                            && viewer_side(s, tri, sides[l])
-                        {
-                            mine[byte] |= m;
-                        }
-                    }
+            for (x, px) in out.iter_mut().enumerate() {
+                let i = y * w + x;
+                let at = x * stride;
+                let Some(s) = r.shading_point(gbuffer, i) else { continue };
+                if let Some(pts) = pts.as_deref_mut()
+                    && r.diffuse(s.tri)
+                {
+                    pts[x] = ShadePoint::of(&s);
                 }
-                points.push(s);
-            }
-            // The rays light by light, each light's along the row: rays to one light from
-            // neighbouring points traverse the same nodes one after the other.
-            for (l, light) in r.lights.iter().enumerate().filter(|(l, _)| by_rays[*l]) {
-                let m = 1u8 << (l % 8);
-                for (x, s) in points.iter().enumerate() {
-                    let byte = x * stride + l / 8;
-                    let Some(s) = s.as_ref().filter(|_| mine[byte] & m != 0) else { continue };
+                let tri = &r.scene.positions[s.tri as usize];
+                let sides = sides.of(s.tri, tri, &r.lights);
+                let before = c;
+                *px += reflect(r, &s, |l, light| {
+                    if !by_rays[l] {
+                        return None;
+                    }
+                    let (byte, m) = (at + l / 8, 1u8 << (l % 8));
+                    // Decided by a border ray already, and shaded with it (a deferred pixel).
+                    if und[byte] & m != 0 {
+                        return None;
+                    }
+                    let g = light_geometry(&s, light)?;
+                    if !viewer_side(&s, tri, sides[l]) {
+                        return None;
+                    }
                     faces[byte] |= m;
                     und[byte] |= m;
                     counted[l].rays += 1;
-                    let before = c;
                     let ray = spawn_ray_to(s.p, s.p_err, s.ng, light.position);
-                    if !r.tracer.occluded(&ray, RayKind::Shadow, &mut c) {
-                        lit[byte] |= m;
+                    if r.tracer.occluded(&ray, RayKind::Shadow, &mut c) {
+                        return None;
                     }
-                    r.pixel_rays.add(y * w + x, &before, &c);
-                }
-            }
-            // Their light, added to the pixels' (the lights in order, as `reflect` sums them).
-            for (x, (px, s)) in out.iter_mut().zip(&points).enumerate() {
-                let (own, lit) = (&mine[x * stride..][..stride], &lit[x * stride..][..stride]);
-                let Some(s) = s.as_ref().filter(|_| own.iter().any(|&b| b != 0)) else { continue };
-                *px += reflect(r, s, |l, light| {
-                    let (byte, m) = (l / 8, 1u8 << (l % 8));
-                    (own[byte] & lit[byte] & m != 0).then(|| light_geometry(s, light)).flatten()
+                    lit[byte] |= m;
+                    Some(g)
                 });
+                r.pixel_rays.add(i, &before, &c);
             }
             (c, counted)
         };

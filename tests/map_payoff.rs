@@ -89,3 +89,30 @@ fn a_long_horizon_builds_every_map_and_changes_nothing() {
     assert_eq!(second.stats.maps_built as usize, s.lights.len());
     assert!(bits(&second) == bits(&inf), "the grown horizon's frame differs from a fresh renderer's");
 }
+
+/// One image of each thesis scene at 640x480 (`hyrt render`'s horizon, 1 frame): the choice the
+/// unit costs give, from counts alone. The Cornell box's and the office's maps cost more than
+/// the rays they would save in one frame; the conference's four fit in its BVH's build time.
+/// (The figures behind it: docs/results.md, "One image: light maps only where they pay".)
+#[test]
+fn one_image_of_each_thesis_scene_gets_the_maps_that_pay_in_it() {
+    for (file, maps) in [("cornell-bunny-mirror.toml", 0), ("office.toml", 0), ("conference.toml", 4)] {
+        let s = hyrt::scene::load(root().join("scenes").join(file).to_str().unwrap()).unwrap();
+        assert_eq!((s.settings.width, s.settings.height), (640, 480), "{file}");
+        let f = render(&s, Options { check_visibility: false, ..with_horizon(1.0) });
+        let with_map = f.stats.lights.iter().filter(|l| l.pages_used > 0).count();
+        eprintln!("{file}: {with_map} of {} lights with a map; {:#?}", s.lights.len(), f.stats.decisions);
+        assert_eq!(with_map, maps, "{file}");
+        for (l, st) in f.stats.lights.iter().enumerate() {
+            let d =
+                f.stats.decisions.iter().find(|d| d.what == Subject::Light(l)).expect("a decision per light");
+            let want = if st.pages_used > 0 { "map built: " } else { "no map, shadow rays: " };
+            assert!(d.reason.starts_with(want), "{file}, light {l}: {}", d.reason);
+            assert!(
+                d.reason.contains(&format!("predicted fastest with {maps} of {} maps", s.lights.len())),
+                "{}",
+                d.reason
+            );
+        }
+    }
+}

@@ -384,6 +384,22 @@ fn sixty_four_lights_conference() {
     }
     assert!(total <= 64 * map_budget_bytes(), "the 64 maps hold {total} bytes > 64 budgets");
     assert!(a.psnr_db >= MIN_PSNR_DB, "conference-64: PSNR {:.2} dB < {MIN_PSNR_DB}", a.psnr_db);
+
+    // One image (`hyrt render`'s horizon of 1 frame): the 64 maps' builds exceed the BVH's
+    // build time many times over, and none pays in one frame; every pair is a ray's.
+    let mut one = Options::hybrid();
+    one.shadow.map_horizon = 1.0;
+    let f = render(&s, one);
+    assert_eq!(f.stats.maps_built, 0, "{:?}", f.stats.decisions.iter().take(3).collect::<Vec<_>>());
+    assert!(
+        f.stats.lights.iter().all(|l| l.map_bytes == 0 && l.lit + l.shadowed == 0),
+        "{:?}",
+        f.stats.lights[0]
+    );
+    // As many shadow rays as the reference casts, but for the few pixels whose rasterized hit
+    // differs from the primary ray's (8 pixels' 64 lights at most).
+    let (h, r) = (f.stats.rays.shadow, reference.stats.rays.shadow);
+    assert!(h.abs_diff(r) <= 8 * 64, "one image: {h} shadow rays against the reference's {r}");
 }
 
 /// The hybrid with paged maps gives the same bytes, rays and page counts with 1 and 2 threads

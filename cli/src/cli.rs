@@ -287,8 +287,10 @@ fn render(a: &RenderArgs) -> Result<()> {
 /// Frames of each side timed by `--vs-reference`.
 const VS_FRAMES: usize = 3;
 
-/// Cold first frames of each side timed by `--vs-reference` (each on a fresh renderer).
-const COLD_FRAMES: usize = 2;
+/// Cold first frames of each side timed by `--vs-reference` (each on a fresh renderer): one
+/// image's time varies by a tenth from run to run on a shared machine, and the median of four
+/// holds still better than that of two.
+const COLD_FRAMES: usize = 4;
 
 /// `--vs-reference`: the hybrid's frame against the reference's, both timed with warm caches,
 /// alternated, and the image compared; and the first frame of each on a fresh renderer
@@ -339,8 +341,8 @@ fn vs_reference(
 
 /// The first frame of each side as one image costs from the command line, scene loading
 /// excluded: a fresh [`Renderer`] (its BVH built, no map or VPL cached), then one frame, in
-/// wall time. [`COLD_FRAMES`] of each, in the order reference, hybrid, hybrid, reference (so
-/// that neither side always goes first), summarised by medians; the hybrid's light-map build
+/// wall time. [`COLD_FRAMES`] of each, in pairs alternately reference first and hybrid first
+/// (so that neither side always goes first), summarised by medians; the hybrid's light-map build
 /// is its frames' `map_build` pass. Each renderer is dropped before the next is made.
 fn cold_first_frames(
     scene: &hyrt::scene::Scene,

@@ -49,7 +49,7 @@ impl Renderer<'_> {
             })
         });
         if let Some(s) = &mut shadowing {
-            run.pass(Pass::Borders, |_| self.borders(&mut s.bufs, w as usize, h as usize, &s.by_rays));
+            run.pass(Pass::Borders, |_| self.borders(&mut s.bufs, w as usize, h as usize));
             let check = self.options.check_visibility;
             let traced = run.pass(Pass::ShadowRays, |run| {
                 if !deferred.is_empty() {
@@ -155,7 +155,7 @@ impl Renderer<'_> {
         let maps = self.map_build(gbuffer, &mut super::FrameStats::default());
         let mut s = self.classify(gbuffer, maps, direct, points, &|| {});
         let (w, h) = (self.scene.settings.width as usize, self.scene.settings.height as usize);
-        self.borders(&mut s.bufs, w, h, &s.by_rays);
+        self.borders(&mut s.bufs, w, h);
         if trace {
             s.trace(self, gbuffer, direct);
         }

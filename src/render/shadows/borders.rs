@@ -11,7 +11,7 @@ impl Renderer<'_> {
     /// dilated; eight lights per byte operation ([`border::laplacian_border_bits`],
     /// [`border::dilate_bits`]). With `keep_buffers`, also the border before
     /// dilation.
-    pub(crate) fn borders(&self, bufs: &mut ShadowBuffers, w: usize, h: usize, by_rays: &[bool]) {
+    pub(crate) fn borders(&self, bufs: &mut ShadowBuffers, w: usize, h: usize) {
         let opts = &self.options.shadow;
         let n = w * h;
         let nl = self.lights.len();
@@ -32,12 +32,6 @@ impl Renderer<'_> {
         // Then only the pixels with a decision (a border without dilation has no others).
         if opts.dilate > 0 {
             border::dilate_bits(und, Some(faces), stride, w, h, opts.dilate as usize);
-        }
-        // The lights without a map have no border: rays decide all their pairs, after the
-        // border rays (`Shadowing::trace_without_maps`).
-        if by_rays.iter().any(|&r| r) {
-            let keep: Vec<u8> = super::light_mask(by_rays, stride).iter().map(|m| !m).collect();
-            und.chunks_exact_mut(stride).for_each(|p| p.iter_mut().zip(&keep).for_each(|(u, k)| *u &= k));
         }
     }
 }

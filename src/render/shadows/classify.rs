@@ -150,7 +150,8 @@ impl Renderer<'_> {
                         // geometry kept for the shading below.
                         let seen = seen_winding(&s, tri);
                         for (l, light) in lights.iter().enumerate() {
-                            // A light without a map: the ray pass decides and shades it.
+                            // A light without a map: the ray pass decides and shades it. With no
+                            // `faces` bit it has no border either (borders are within `faces`).
                             if by_rays[l] {
                                 terms.push(LightTerms { r: 0.0, cos_light: 0.0 });
                                 geo.push(None);

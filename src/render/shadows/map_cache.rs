@@ -72,16 +72,11 @@ impl Renderer<'_> {
         let nf = LightMap::face_count(kind);
         let lights = &self.lights;
         let needed = self.maps.needed.get_or_init(|| {
+            let cached = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
             let have: Vec<bool> = (0..self.lights.len())
-                .map(|l| {
-                    self.maps
-                        .maps
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .get(l)
-                        .is_some_and(|m| m.as_ref().is_some_and(|m| m.page_count() > 0))
-                })
+                .map(|l| cached.get(l).is_some_and(|m| m.as_ref().is_some_and(|m| m.page_count() > 0)))
                 .collect();
+            drop(cached);
             self.needs(gbuffer, &have, !self.maps.framed.load(std::sync::atomic::Ordering::Relaxed))
         });
         self.maps.framed.store(true, std::sync::atomic::Ordering::Relaxed);

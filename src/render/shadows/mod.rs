@@ -293,13 +293,6 @@ fn per_light<T: Send>(lights: usize, n: usize, f: impl Fn(usize, usize) -> T + S
 }
 
 /// Per-light counts of parts (bands, rows) summed in order, for `lights` lights.
-/// The per-pixel byte mask (`stride` bytes) of the lights `l` with `set[l]`.
-fn light_mask(set: &[bool], stride: usize) -> Vec<u8> {
-    let mut m = vec![0u8; stride];
-    set.iter().enumerate().filter(|(_, s)| **s).for_each(|(l, _)| m[l / 8] |= 1 << (l % 8));
-    m
-}
-
 fn sum_per_light<T: Copy + Default + std::ops::AddAssign>(parts: Vec<Vec<T>>, lights: usize) -> Vec<T> {
     let mut sum = vec![T::default(); lights];
     for part in parts {

@@ -466,16 +466,43 @@ impl Tracer {
     }
 
     fn blocked<const CUT: bool>(&self, ray: &Ray) -> bool {
+        self.blocker::<CUT>(ray).is_some()
+    }
+
+    /// The original id of the first triangle the traversal finds blocking `ray`: any blocker,
+    /// not the nearest, but always the same one for the same ray.
+    fn blocker<const CUT: bool>(&self, ray: &Ray) -> Option<u32> {
         let Bvh { bvh, tris, ids, .. } = self.bvh();
         if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
-            return false;
+            return None;
         }
         let (ob, pre) = self.scaled(ray);
-        !bvh.ray_traverse_miss(ob, |r, i| {
-            intersect_triangle(&pre, &tris[i], r.tmax)
+        let mut found = None;
+        bvh.ray_traverse_miss(ob, |r, i| {
+            let t = intersect_triangle(&pre, &tris[i], r.tmax)
                 .filter(|h| !CUT || self.solid(ids[i], h.bary))
-                .map_or(f32::INFINITY, |h| h.t)
-        })
+                .map_or(f32::INFINITY, |h| h.t);
+            if t < r.tmax {
+                found = Some(ids[i]);
+            }
+            t
+        });
+        found
+    }
+
+    /// [`Tracer::occluded_with_hint`] that also names the occluder: the hint when it blocks
+    /// the ray, else the triangle the traversal found first, else `None` (unoccluded). For a
+    /// caller that keeps the last occluder as the next, nearby ray's hint (a shadow cache).
+    pub fn occluder_with_hint(&self, ray: &Ray, hint: u32, counts: &mut RayCounts) -> Option<u32> {
+        counts.add(RayKind::Shadow, 1);
+        if (hint as usize) < self.triangle_count() && self.hits_triangle(hint, ray).is_some() {
+            counts.shadow_hint_hits += 1;
+            return Some(hint);
+        }
+        match &self.cutouts {
+            None => self.blocker::<false>(ray),
+            Some(_) => self.blocker::<true>(ray),
+        }
     }
 
     /// A shadow ray that first tests the occluder hint `hint` (a triangle id from a shadow map;

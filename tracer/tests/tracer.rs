@@ -377,9 +377,16 @@ fn traversal_agrees_with_brute_force_on_boxes_far_away() {
             let brute = (0..tris.len() as u32).any(|k| tracer.hits_triangle(k, &ray).is_some());
             let traversed = tracer.occluded(&ray, RayKind::Shadow, &mut c);
             let hinted = tracer.occluded_with_hint(&ray, (i * 13) % tris.len() as u32, &mut c);
+            // Named, with no hint and with one: a triangle that blocks the ray, or none.
+            let named = [u32::MAX, (i * 13) % tris.len() as u32]
+                .map(|hint| tracer.occluder_with_hint(&ray, hint, &mut c));
+            let names_a_blocker = |o: Option<u32>| {
+                o.is_some() == brute && o.is_none_or(|t| tracer.hits_triangle(t, &ray).is_some())
+            };
             total += 1;
             blocked += usize::from(brute);
             disagree += usize::from(brute != traversed) + usize::from(brute != hinted);
+            disagree += named.iter().filter(|&&o| !names_a_blocker(o)).count();
         }
         assert!(total > 5000 && blocked > 1000, "offset {offset}: {blocked} of {total} blocked");
         assert_eq!(disagree, 0, "offset {offset}: {disagree} disagreements in {total} rays");
@@ -460,6 +467,9 @@ fn rays_pass_through_cut_out_holes_alone() {
     assert!(!cut.occluded_with_hint(&down(hole.0, hole.1, 1.5), 0, &mut c));
     assert!(cut.occluded_with_hint(&down(solid.0, solid.1, 1.5), 0, &mut c));
     assert_eq!(c.shadow_hint_hits, before + 1);
+    assert_eq!(cut.occluder_with_hint(&down(hole.0, hole.1, 1.5), 0, &mut c), None);
+    assert_eq!(cut.occluder_with_hint(&down(solid.0, solid.1, 1.5), u32::MAX, &mut c), Some(0));
+    assert_eq!(c.shadow_hint_hits, before + 1, "no hint, or one in a hole: no hint hit");
     let ray = down(hole.0, hole.1, f32::INFINITY);
     assert!(cut.hits_triangle(0, &ray).is_none() && plain.hits_triangle(0, &ray).is_some());
     assert_eq!(cut.hit_on_plane(0, &ray), plain.hit_on_plane(0, &ray));

@@ -13,7 +13,8 @@
 //! shadow_rays  the undecided (pixel, light) pairs listed light by light, in screen order: a
 //!              shadow ray each (the hint classify kept first), in fixed chunks; the
 //!              answers into lit, and the direct light of those pixels again; then, for the
-//!              lights without a map, a shadow ray per pixel facing them, streamed by rows
+//!              lights without a map, a shadow ray per pixel facing them, streamed by rows,
+//!              each testing the light's last blocker in the row first
 //! ```
 //!
 //! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points

@@ -466,7 +466,16 @@ impl Tracer {
     }
 
     fn blocked<const CUT: bool>(&self, ray: &Ray) -> bool {
-        self.blocker::<CUT>(ray).is_some()
+        let Bvh { bvh, tris, ids, .. } = self.bvh();
+        if bvh.nodes.is_empty() || !ray.origin.is_finite() || !ray.dir.is_finite() {
+            return false;
+        }
+        let (ob, pre) = self.scaled(ray);
+        !bvh.ray_traverse_miss(ob, |r, i| {
+            intersect_triangle(&pre, &tris[i], r.tmax)
+                .filter(|h| !CUT || self.solid(ids[i], h.bary))
+                .map_or(f32::INFINITY, |h| h.t)
+        })
     }
 
     /// The original id of the first triangle the traversal finds blocking `ray`: any blocker,

@@ -63,6 +63,11 @@ pub struct BenchArgs {
     /// each frame drew (`orbit.md`, `orbit.csv`; see `hyrt::orbit`).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
     pub orbit: Option<u32>,
+    /// Instead of the tables: each pass's warm-frame time on 1 thread and on `--threads` (all
+    /// cores by default), the reference's and the hybrid's frames alternated, and its speed-up
+    /// (`scaling.md`, `scaling.csv`; `--runs` frames per count).
+    #[arg(long, conflicts_with = "orbit")]
+    pub scaling: bool,
 }
 
 /// The configurations of every table: id and render flags (module docs).
@@ -164,6 +169,9 @@ fn bench(a: &BenchArgs) -> Result<()> {
     }
     if let Some(n) = a.orbit {
         return crate::orbit::run(a, &loaded, n);
+    }
+    if a.scaling {
+        return crate::scaling::run(a, &loaded);
     }
     let flags = configs(a.vpls);
     let mut per_scene = Vec::new();

@@ -9,6 +9,7 @@ mod measure;
 mod orbit;
 mod plot;
 mod report;
+mod scaling;
 mod stats;
 mod sweep;
 

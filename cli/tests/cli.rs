@@ -625,6 +625,56 @@ fn bench_orbit_writes_frame_times_along_the_path() {
     assert!(!std::path::Path::new(out).join("tables.md").exists());
 }
 
+/// `hyrt bench --scaling` times every pass of both configurations on 1 thread and on
+/// `--threads`, and writes a row per pass: each pass the frame ran, and the whole frame, with
+/// its two medians and their ratio; not the thesis tables.
+#[test]
+fn bench_scaling_writes_each_pass_at_both_thread_counts() {
+    let dir = common::out_dir("bench-scaling");
+    let out = dir.to_str().unwrap();
+    let (ok, stdout, err) = common::hyrt(&[
+        "bench",
+        "cornell",
+        "--size",
+        "40x30",
+        "--scaling",
+        "--runs",
+        "2",
+        "--threads",
+        "2",
+        "--out",
+        out,
+    ]);
+    assert!(ok, "{err}");
+    let md = std::fs::read_to_string(dir.join("scaling.md")).unwrap();
+    assert_eq!(md.trim(), stdout.trim());
+    let csv = std::fs::read_to_string(dir.join("scaling.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let passes =
+        |config: &str| -> Vec<&str> { rows.iter().filter(|r| r[1] == config).map(|r| r[2]).collect() };
+    for (config, has, lacks) in
+        [("rt", ["direct", "frame"], "classify"), ("smerts-cube", ["classify", "frame"], "direct")]
+    {
+        let p = passes(config);
+        assert!(has.iter().all(|h| p.contains(h)) && !p.contains(&lacks), "{config}: {p:?}");
+    }
+    for r in &rows {
+        assert_eq!(r[3], "2", "{r:?}");
+        let (one, two, up): (f64, f64, f64) =
+            (r[4].parse().unwrap(), r[5].parse().unwrap(), r[6].parse().unwrap());
+        assert!(one >= 0.0 && two >= 0.0, "{r:?}");
+        // Up to the CSV's rounding of each figure to 3 decimals.
+        if one > 0.01 && two > 0.01 {
+            let slack = up * (5e-4 / one + 5e-4 / two) + 1e-3;
+            assert!((up - one / two).abs() <= slack, "speed-up is the ratio: {r:?}");
+        }
+    }
+    assert_eq!(md.lines().filter(|l| l.starts_with("| cornell")).count(), rows.len());
+    assert!(!std::path::Path::new(out).join("tables.md").exists());
+    let (ok, _, err) = common::hyrt(&["bench", "cornell", "--scaling", "--orbit", "3"]);
+    assert!(!ok && err.contains("cannot be used with"), "{err}");
+}
+
 /// `docs/cli.md`'s knob table is the one `hyrt::options` makes (flags, values, both presets'
 /// defaults): a knob or default changed in code changes it. `UPDATE_DOCS=1` rewrites it.
 #[test]

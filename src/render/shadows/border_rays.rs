@@ -22,7 +22,6 @@ impl Shadowing<'_> {
     pub fn trace(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], direct: &mut [Vec3]) -> RayCounts {
         let n = gbuffer.len();
         let nl = self.maps.len();
-        let cls = classifiers(&self.maps, self.planes, r);
         let b = &mut self.bufs;
         let stride = b.faces.stride;
         // The pixels with rays, in order, and their shading points.
@@ -31,6 +30,12 @@ impl Shadowing<'_> {
             .into_par_iter()
             .flat_map_iter(|y| (y * w..((y + 1) * w).min(n)).filter(|&i| b.und.any(i)).map(|i| i as u32))
             .collect();
+        // None (no light has a map, or no borders): the classifiers, which need every
+        // occluder's plane, are not made.
+        if pixels.is_empty() {
+            return RayCounts::default();
+        }
+        let cls = classifiers(&self.maps, self.planes, r);
         let points: Vec<SurfaceHit> = pixels
             .par_iter()
             .map(|&i| r.shading_point(gbuffer, i as usize).expect("undecided pixels have a shading point"))

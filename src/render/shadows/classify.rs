@@ -81,9 +81,12 @@ impl Renderer<'_> {
         let level =
             |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0, |r| r.level_from(recv, t));
 
-        let planes: &'r [Plane] = self.occluders().0;
-        let cls = classifiers(&maps, planes, self);
-        let (groups, shared) = self.plane_groups();
+        // No light with a map: nothing is decided here, and the occluders' planes and groups
+        // (a pass over every triangle, the first time) are not needed at all.
+        let no_map = !by_rays.is_empty() && by_rays.iter().all(|&b| b);
+        let planes: &'r [Plane] = if no_map { &[] } else { self.occluders().0 };
+        let cls = if no_map { Vec::new() } else { classifiers(&maps, planes, self) };
+        let (groups, shared) = if no_map { (&[][..], &[][..]) } else { self.plane_groups() };
         bufs.faces.reset(n, nl);
         bufs.lit.reset(n, nl);
         bufs.edge.reset(n, nl);
@@ -92,7 +95,6 @@ impl Renderer<'_> {
         bufs.und.reset(n, nl);
         bufs.border.clear();
         let stride = bufs.faces.stride;
-        let no_map = !by_rays.is_empty() && by_rays.iter().all(|&b| b);
         let band = (TILE * w).max(1);
         let bands = direct
             .par_chunks_mut(band)

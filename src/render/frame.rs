@@ -52,12 +52,15 @@ impl Renderer<'_> {
             run.pass(Pass::Borders, |_| self.borders(&mut s.bufs, w as usize, h as usize));
             let check = self.options.check_visibility;
             let traced = run.pass(Pass::ShadowRays, |run| {
+                // Work for the core a first frame's background BVH build leaves idle.
+                let ahead = s.rows_ahead(self, &gbuffer, &|| self.tracer.is_ready());
                 if !deferred.is_empty() {
                     run.stats.rays += visibility::resolve_deferred(self, &mut gbuffer, &deferred);
                     s.add_ray_pixels(self, &gbuffer, &deferred, points.as_deref_mut());
                 }
                 run.stats.rays += s.trace(self, &gbuffer, &mut direct);
-                run.stats.rays += s.trace_without_maps(self, &gbuffer, &mut direct, points.as_deref_mut());
+                run.stats.rays +=
+                    s.trace_without_maps(self, &gbuffer, &mut direct, points.as_deref_mut(), ahead);
                 s.finish(self, &gbuffer, check);
             });
             if traced.is_none() {

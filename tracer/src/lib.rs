@@ -54,7 +54,7 @@ use obvhs::{
 pub use batch::RowRays;
 pub use counts::{RayCounts, RayKind};
 pub use hyrt_simd::{Isa, Tier};
-pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
+pub use offset::{offset_ray_origin, ray_to, spawn_ray, spawn_ray_to};
 pub use orient::{PlaneSide, plane_side};
 pub use triangle::{RayPrecomp, TriHit, intersect_plane, intersect_triangle, plane_distance_f64};
 
@@ -341,6 +341,13 @@ impl Tracer {
                 Err(panic) => std::panic::resume_unwind(panic),
             }
         })
+    }
+
+    /// Whether the BVH is built, so that a query that traverses it will not wait (for a caller
+    /// with other work to do meanwhile). Never waits itself.
+    pub fn is_ready(&self) -> bool {
+        self.built.get().is_some()
+            || self.pending.lock().unwrap_or_else(|e| e.into_inner()).as_ref().is_none_or(|h| h.is_finished())
     }
 
     /// This tracer with alpha cut-outs: hits on `cutouts`' triangles count only where they are

@@ -61,7 +61,14 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 
 /// A shadow ray from a surface point towards `target`, stopping just short of it.
 pub fn spawn_ray_to(p: Vec3, p_error: Vec3, n: Vec3, target: Vec3) -> Ray {
-    let o = offset_ray_origin(p, p_error, n, target - p);
+    ray_to(offset_ray_origin(p, p_error, n, target - p), target)
+}
+
+/// The shadow ray from `o`, an origin already offset ([`offset_ray_origin`]), towards
+/// `target`, stopping just short of it: the second half of [`spawn_ray_to`], for a caller that
+/// keeps origins and makes their rays later.
+#[inline]
+pub fn ray_to(o: Vec3, target: Vec3) -> Ray {
     let v = target - o;
     let dist = v.length();
     Ray::new(o, v / dist, dist * (1.0 - SHADOW_EPSILON))

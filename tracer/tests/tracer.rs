@@ -422,6 +422,13 @@ fn a_background_build_answers_as_a_build_at_once() {
     assert_eq!(a, b);
     assert_eq!(later.bvh_triangle_count(), now.bvh_triangle_count());
     assert_eq!(later.bvh_triangle_count(), tris.len() - 2);
+    // Ready once a query has waited for it; a build at once is ready from the start.
+    assert!(later.is_ready() && now.is_ready());
+    let pending = Tracer::build_in_background(&grid(300));
+    while !pending.is_ready() {
+        std::thread::yield_now();
+    }
+    assert_eq!(pending.bvh_triangle_count(), 2 * 300 * 300, "ready, and built");
 }
 
 /// Holes in the triangles of a cut-out: a point of triangle 0 or 1 is a hole where its

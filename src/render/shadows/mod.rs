@@ -14,7 +14,8 @@
 //!              shadow ray each (the hint classify kept first), in fixed chunks; the
 //!              answers into lit, and the direct light of those pixels again; then, for the
 //!              lights without a map, a shadow ray per pixel facing them, streamed by rows,
-//!              each testing the light's last blocker in the row first
+//!              each testing the light's last blocker in the row first (on a first frame, the
+//!              rows are prepared while the BVH is still building)
 //! ```
 //!
 //! Fusing the shading points, the decisions and the shading into one pass keeps a tile's points

@@ -113,7 +113,15 @@ impl Resolution {
     /// every light): `sqrt(cos_view) / d * scale`, `cos_view` clamped to `[1/16, 1]`.
     #[inline]
     pub fn receiver(&self, p: Vec3, cos_view: f32) -> f32 {
-        cos_view.abs().clamp(1.0 / 16.0, 1.0).sqrt() / (p - self.eye).length() * self.scale
+        self.receiver_at((p - self.eye).length(), cos_view)
+    }
+
+    /// [`Resolution::receiver`] for a point seen at distance `dist` along its view path: a
+    /// point seen in a flat mirror is seen as through a window, at the length of the whole
+    /// path (eye to mirror to point), not at its distance from the eye.
+    #[inline]
+    pub fn receiver_at(&self, dist: f32, cos_view: f32) -> f32 {
+        cos_view.abs().clamp(1.0 / 16.0, 1.0).sqrt() / dist * self.scale
     }
 
     /// [`Resolution::level`] from [`Resolution::receiver`]'s factor, for a receiver with unit

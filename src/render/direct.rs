@@ -83,16 +83,17 @@ pub fn shade(
     })
 }
 
-/// [`shade`] at a point with no screen neighbours (a mirror hit): shadow rays, or the maps'
-/// map-space test with `shadowing`.
+/// [`shade`] at a point with no screen neighbours (a mirror hit, at the end of a view path
+/// `dist` long): shadow rays, or the maps' map-space test with `shadowing`.
 pub fn shade_point(
     r: &Renderer,
     hit: &SurfaceHit,
+    dist: f32,
     shadowing: Option<&Shadowing>,
     counts: &mut RayCounts,
 ) -> Vec3 {
     match shadowing {
         None => shade(r, hit, counts, |_, light, s, c| shadow_ray(s, &light.position, r, c)),
-        Some(sh) => shade(r, hit, counts, |l, _, s, c| sh.visible_at(r, l, s, c)),
+        Some(sh) => shade(r, hit, counts, |l, _, s, c| sh.visible_at(r, l, s, dist, c)),
     }
 }

@@ -91,9 +91,15 @@ impl Renderer<'_> {
 
         let mut spec = vec![Vec3::ZERO; n];
         if let Some(rays) = run.pass(Pass::Specular, |_| {
-            specular::run(self, &gbuffer, shadowing.as_ref(), vpls.as_ref(), &mut spec, progress)
+            specular::run(self, &gbuffer, shadowing.as_mut(), vpls.as_ref(), &mut spec, progress)
         }) {
             run.stats.rays += rays;
+        }
+        if let Some(s) = &shadowing
+            && self.plan.runs(Pass::Specular)
+        {
+            s.mirror_pages_done(self);
+            s.report_mirror_pages(&mut run.stats);
         }
 
         // Compose.

@@ -7,13 +7,16 @@ use rayon::prelude::*;
 
 use super::{Progress, Renderer, SurfaceHit, direct, indirect::Vpls, shadows::Shadowing};
 
-/// Adds the mirror-reflected light of every camera hit on a specular material; the surfaces
-/// the mirror paths meet decide shadows with `shadowing`'s maps when given (see
-/// `direct::shade_point`).
+/// Adds the mirror-reflected light of every camera hit on a specular material (to `out`, zero
+/// where nothing is reflected); the surfaces the mirror paths meet decide shadows with
+/// `shadowing`'s maps when given (see `direct::shade_point`), first extended with the pages
+/// those hits read (`Shadowing::draw_mirror_pages`).
 ///
 /// The paths advance together, one bounce at a time (a wavefront): all reflection rays of a
 /// bounce are traced, then their hits are put in spatial order (a Morton code of the hit
-/// point) and shaded. Mirror hits are scattered over the scene, and shading one looks up every
+/// point). Once every bounce is traced, the maps get the pages all the hits read (so that a
+/// frame shades with the maps the next frame of the view reuses, and renders the same image),
+/// and the hits are shaded, bounce by bounce. Mirror hits are scattered over the scene, and shading one looks up every
 /// light's map (and every VPL's) at its position and casts shadow rays from it: in pixel order
 /// those lookups jump across maps of up to a gigabyte, in spatial order neighbouring hits read
 /// neighbouring texels and traverse the same BVH nodes. Each path is still its own pixel's sum,
@@ -21,7 +24,7 @@ use super::{Progress, Renderer, SurfaceHit, direct, indirect::Vpls, shadows::Sha
 pub fn run(
     r: &Renderer,
     gbuffer: &[Option<Hit>],
-    shadowing: Option<&Shadowing>,
+    mut shadowing: Option<&mut Shadowing>,
     vpls: Option<&Vpls>,
     out: &mut [Vec3],
     progress: Progress,
@@ -39,49 +42,60 @@ pub fn run(
             let hit = hit.as_ref().filter(|h| kr_of(h.tri) != Vec3::ZERO)?;
             let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
             let hit = SurfaceHit::new(r.scene, hit, dir);
-            Some(Path { pixel: i as u32, hit, weight: Vec3::ONE, sum: Vec3::ZERO, key: 0 })
+            Some(Path { pixel: i as u32, hit, dist: hit.t, weight: Vec3::ONE, key: 0 })
         })
         .collect();
     let (lo, hi) = r.bounds.unwrap_or_default();
     let depth = r.scene.settings.max_depth as usize;
-    let mut done: Vec<Path> = Vec::with_capacity(paths.len());
     let mut total = RayCounts::default();
-    let mut rows_reported = 0;
-    for d in 0..depth {
-        // Trace one bounce; the paths that leave the scene or reach a non-mirror end here.
-        let traced: Vec<(Vec<Path>, Vec<Path>, RayCounts)> = paths
+    // Every bounce traced first, its hits kept in spatial order; the paths that leave the
+    // scene or reach a non-mirror end at their bounce.
+    let mut bounces: Vec<Vec<Path>> = Vec::new();
+    for _ in 0..depth {
+        let traced: Vec<(Vec<Path>, RayCounts)> = paths
             .par_chunks_mut(256)
             .map(|chunk| {
                 let mut c = RayCounts::default();
                 let mut live = Vec::with_capacity(chunk.len());
-                let mut ended = Vec::new();
                 for p in chunk.iter_mut() {
                     let before = c;
                     let next = bounce(r, &p.hit, &mut p.weight, kr_of(p.hit.tri), &mut c);
                     r.pixel_rays.add(p.pixel as usize, &before, &c);
-                    match next {
-                        Some(hit) => {
-                            p.hit = hit;
-                            p.key = morton(hit.p, lo, hi);
-                            live.push(*p);
-                        }
-                        None => ended.push(*p),
+                    if let Some(hit) = next {
+                        p.hit = hit;
+                        p.dist += hit.t;
+                        p.key = morton(hit.p, lo, hi);
+                        live.push(*p);
                     }
                 }
-                (live, ended, c)
+                (live, c)
             })
             .collect();
         let mut next = Vec::with_capacity(paths.len());
-        for (live, ended, c) in traced {
+        for (live, c) in traced {
             next.extend(live);
-            done.extend(ended);
             total += c;
         }
         // Spatial order; ties by pixel, so the order (and nothing else) is deterministic.
         next.par_sort_unstable_by_key(|p| (p.key, p.pixel));
-        // Shade the new hits.
-        let shaded: Vec<RayCounts> = next
-            .par_chunks_mut(256)
+        if next.is_empty() {
+            break;
+        }
+        paths = next.clone();
+        bounces.push(next);
+    }
+    // The light-map pages the hits read that no camera hit did (`mirror_hits`), all bounces'
+    // at once: every hit is then shaded with the maps the next frame will have.
+    if let Some(s) = shadowing.as_mut() {
+        let hits: Vec<(&SurfaceHit, f32)> = bounces.iter().flatten().map(|p| (&p.hit, p.dist)).collect();
+        s.draw_mirror_pages(r, &hits);
+    }
+    let shadowing = shadowing.as_deref();
+    // Shade the hits, bounce by bounce; each pixel's sum in bounce order.
+    let mut rows_reported = 0;
+    for (d, hits) in bounces.iter().enumerate() {
+        let shaded: Vec<(Vec<Terms>, RayCounts)> = hits
+            .par_chunks(256)
             .map(|chunk| {
                 let mut c = RayCounts::default();
                 // Indirect light at the chunk's hits together: VPL by VPL, with the vector
@@ -92,49 +106,62 @@ pub fn run(
                         chunk.iter().map(|p| Vpls::subset_of(p.pixel as usize, w, k).0).collect();
                     v.at_subsets(r, &hits, &subsets, k * k)
                 });
-                for (n, p) in chunk.iter_mut().enumerate() {
-                    let before = c;
-                    p.sum += p.weight * direct::shade_point(r, &p.hit, shadowing, &mut c);
-                    if let Some(ind) = &batched {
-                        p.sum += p.weight * ind[n];
-                    } else if let Some(v) = vpls {
-                        let (subset, stride) = Vpls::subset_of(p.pixel as usize, w, k);
-                        p.sum += p.weight * v.at_subset(r, &p.hit, subset, stride, &mut c);
-                    }
-                    r.pixel_rays.add(p.pixel as usize, &before, &c);
-                }
-                c
+                let terms = chunk
+                    .iter()
+                    .enumerate()
+                    .map(|(n, p)| {
+                        let before = c;
+                        let direct = p.weight * direct::shade_point(r, &p.hit, p.dist, shadowing, &mut c);
+                        let indirect = if let Some(ind) = &batched {
+                            Some(p.weight * ind[n])
+                        } else {
+                            vpls.map(|v| {
+                                let (subset, stride) = Vpls::subset_of(p.pixel as usize, w, k);
+                                p.weight * v.at_subset(r, &p.hit, subset, stride, &mut c)
+                            })
+                        };
+                        r.pixel_rays.add(p.pixel as usize, &before, &c);
+                        (direct, indirect)
+                    })
+                    .collect();
+                (terms, c)
             })
             .collect();
-        total += shaded.into_iter().sum();
-        paths = next;
+        // Added as `reflected` adds them: the direct term, then the indirect one.
+        for (chunk, (terms, c)) in hits.chunks(256).zip(shaded) {
+            for (p, (direct, indirect)) in chunk.iter().zip(terms) {
+                let o = &mut out[p.pixel as usize];
+                *o += direct;
+                if let Some(i) = indirect {
+                    *o += i;
+                }
+            }
+            total += c;
+        }
         // Progress: the pass's rows, spread over the bounces.
-        let rows = h * (d + 1) / depth.max(1);
+        let rows = h * (d + 1) / bounces.len();
         for _ in rows_reported..rows {
             progress();
         }
         rows_reported = rows;
-        if paths.is_empty() {
-            break;
-        }
     }
     for _ in rows_reported..h {
         progress();
     }
-    for p in done.iter().chain(&paths) {
-        out[p.pixel as usize] = p.sum;
-    }
     total
 }
 
-/// A mirror path in flight: its pixel, the surface it last met, the product of `Kr` so far and
-/// the light gathered; `key` orders the paths spatially.
+/// A mirror hit's weighted direct light, and its weighted indirect light (with VPLs).
+type Terms = (Vec3, Option<Vec3>);
+
+/// A mirror path in flight: its pixel, the surface it last met and the path's length to it
+/// from the eye, and the product of `Kr` so far; `key` orders the paths spatially.
 #[derive(Clone, Copy)]
 struct Path {
     pixel: u32,
     hit: SurfaceHit,
+    dist: f32,
     weight: Vec3,
-    sum: Vec3,
     key: u64,
 }
 
@@ -196,6 +223,7 @@ fn reflected(
     let mut sum = Vec3::ZERO;
     let mut weight = Vec3::ONE;
     let mut hit = *first;
+    let mut dist = first.t;
     for _ in 0..r.scene.settings.max_depth {
         let kr = r.scene.materials[r.scene.material[hit.tri as usize] as usize].mirror;
         if kr == Vec3::ZERO {
@@ -213,7 +241,8 @@ fn reflected(
             break;
         };
         hit = SurfaceHit::new(r.scene, &h, ray.dir);
-        sum += weight * direct::shade_point(r, &hit, shadowing, counts);
+        dist += hit.t;
+        sum += weight * direct::shade_point(r, &hit, dist, shadowing, counts);
         if let Some((v, (subset, stride))) = vpls {
             sum += weight * v.at_subset(r, &hit, subset, stride, counts);
         }
@@ -251,13 +280,13 @@ mod tests {
         for o in [hybrid, rays] {
             let r = Renderer::new(&s, o);
             let (g, _) = r.visibility();
-            let sh = (o.shadows != crate::render::Shadows::Rays).then(|| {
+            let mut sh = (o.shadows != crate::render::Shadows::Rays).then(|| {
                 let mut direct = vec![Vec3::ZERO; g.len()];
                 r.test_shadowing(&g, &mut direct, None, true)
             });
             let v = r.test_vpls();
             let mut out = vec![Vec3::ZERO; g.len()];
-            let c = run(&r, &g, sh.as_ref(), Some(&v), &mut out, &|| {});
+            let c = run(&r, &g, sh.as_mut(), Some(&v), &mut out, &|| {});
             let (w, k) = (80, o.indirect_opts.interleave as usize);
             let mut c2 = RayCounts::default();
             let mut mirrors = 0;

@@ -302,6 +302,19 @@ impl Renderer<'_> {
             })
             .collect();
         let (added, und_counts) = (vec![0; nl], vec![RayCounted::default(); nl]);
-        Shadowing { maps, bufs, lights, planes, map_counts, resolution, added, und_counts, hints, by_rays }
+        let mirror_pages = vec![0; nl];
+        Shadowing {
+            maps,
+            bufs,
+            lights,
+            planes,
+            map_counts,
+            resolution,
+            added,
+            und_counts,
+            hints,
+            by_rays,
+            mirror_pages,
+        }
     }
 }

@@ -7,7 +7,7 @@ use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap, MapCoord,
     classify::{Classifier, Lookup, Plane},
-    paged::Resolution,
+    paged::{LightTerms, Resolution},
 };
 use hyrt_tracer::spawn_ray_to;
 
@@ -81,6 +81,20 @@ pub(super) fn hint(
     r: &Renderer,
 ) -> u32 {
     cls.hint_at(s.tri, locate(cls, resolution, l, s, r))
+}
+
+/// The level of light `l`'s paged map (0 for whole maps) that `s` reads when it is seen at the
+/// end of a view path `dist` long (a mirror hit: [`Resolution::receiver_at`]).
+pub(super) fn level_along(
+    resolution: &[Resolution],
+    l: usize,
+    s: &SurfaceHit,
+    dist: f32,
+    r: &Renderer,
+) -> u8 {
+    resolution.get(l).map_or(0, |g| {
+        g.level_from(g.receiver_at(dist, s.ng.dot(s.wo)), LightTerms::of(s.p, s.ng, r.lights[l].position))
+    })
 }
 
 /// Where `s` falls in light `l`'s map, at its level (paged maps; 0 otherwise).

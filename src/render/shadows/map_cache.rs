@@ -28,6 +28,10 @@ pub(crate) struct MapCache {
     /// Whether a frame has asked for maps: the first one's BVH is still being built
     /// (`payoff`).
     pub(super) framed: std::sync::atomic::AtomicBool,
+    /// Whether a frame of this view has drawn the pages its mirror hits read (or found them
+    /// not worth it): the same view's mirror hits are the same, so later frames need not look
+    /// (`mirror_hits`). Forgotten with `needed`.
+    pub(super) mirror_marked: std::sync::atomic::AtomicBool,
 }
 
 /// A paged light map's pages to draw for a frame ([`Renderer::light_maps`]).
@@ -260,24 +264,7 @@ impl Renderer<'_> {
             .flat_map(|chunk| {
                 chunk
                     .par_iter()
-                    .map(|job| {
-                        let light = lights[job.light].position;
-                        // Cut-outs: each texel's centre decides whether it sees a hole.
-                        let hole = |id: u32, dir: Vec3| sees_hole(self.scene, light, id, dir);
-                        let holes = Holes { cutouts: self.cutouts(), solid: &[], hole: &hole };
-                        timed(|| {
-                            LightMap::build_pages_with_holes(
-                                &self.scene.positions,
-                                light,
-                                &self.options.shadow.map,
-                                &job.draw,
-                                groups,
-                                (!self.cutouts().is_empty()
-                                    && self.options.shadow.cutouts == CutoutMaps::Texels)
-                                    .then_some(&holes),
-                            )
-                        })
-                    })
+                    .map(|job| timed(|| self.draw_pages(job.light, &job.draw, groups)))
                     .collect::<Vec<_>>()
             })
             .collect();
@@ -301,6 +288,24 @@ impl Renderer<'_> {
         }
     }
 
+    /// Light `l`'s map of pages `draw` alone (to merge into its cached map), with the triangles'
+    /// plane `groups`.
+    pub(super) fn draw_pages(&self, l: usize, draw: &[PageKey], groups: &[u32]) -> LightMap {
+        let light = self.lights[l].position;
+        // Cut-outs: each texel's centre decides whether it sees a hole.
+        let hole = |id: u32, dir: Vec3| sees_hole(self.scene, light, id, dir);
+        let holes = Holes { cutouts: self.cutouts(), solid: &[], hole: &hole };
+        LightMap::build_pages_with_holes(
+            &self.scene.positions,
+            light,
+            &self.options.shadow.map,
+            draw,
+            groups,
+            (!self.cutouts().is_empty() && self.options.shadow.cutouts == CutoutMaps::Texels)
+                .then_some(&holes),
+        )
+    }
+
     /// Drops light `l`'s map (the light moved), keeping the others; which faces the camera
     /// needs is found again, since light `l`'s depend on where it is.
     pub(crate) fn drop_light_map(&mut self, l: usize) {
@@ -310,7 +315,7 @@ impl Renderer<'_> {
         let moved = self.maps.moved.get_mut().unwrap_or_else(|e| e.into_inner());
         moved.resize(moved.len().max(l + 1), false);
         moved[l] = true;
-        self.maps.needed = std::sync::OnceLock::new();
+        self.forget_needed_faces();
     }
 
     /// Drops the cached light maps (made with other map options); with `needs_changed`, also
@@ -318,14 +323,17 @@ impl Renderer<'_> {
     /// with the detail and budget of paged maps).
     pub(crate) fn drop_light_maps(&mut self, needs_changed: bool) {
         self.maps.maps.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
+        // The mirror hits' pages went with the maps.
+        *self.maps.mirror_marked.get_mut() = false;
         if needs_changed {
-            self.maps.needed = std::sync::OnceLock::new();
+            self.forget_needed_faces();
         }
     }
 
     /// Forgets which light-map faces camera hits fall on (the camera moved), keeping the maps.
     pub(crate) fn forget_needed_faces(&mut self) {
         self.maps.needed = std::sync::OnceLock::new();
+        *self.maps.mirror_marked.get_mut() = false;
     }
 
     /// Light `l`'s cached map (for inspection), once a frame has built it; faces no camera hit

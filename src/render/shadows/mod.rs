@@ -220,6 +220,8 @@ pub struct Shadowing<'r> {
     hints: Vec<Vec<BorderHint>>,
     /// Per light, whether shadow rays decide it this frame (no map).
     pub(crate) by_rays: Vec<bool>,
+    /// Per light, the pages drawn for mirror hits this frame ([`Shadowing::draw_mirror_pages`]).
+    pub(crate) mirror_pages: Vec<u32>,
 }
 
 /// A map-space border pair's pixel and the occluder hint its map lookup found.

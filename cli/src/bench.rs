@@ -471,7 +471,8 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         "\n### Cost per unit: CPU ns per map decision, border ray, shadow ray and mirror ray\n\n\
          A pass's median time times the threads, divided by what it counted in a frame: the map \
          decisions of SMeRTS's classify pass ((camera hit, light) pairs, with their direct light), \
-         its border rays (`shadow_rays`: hint first, those pixels shaded again), the reference's \
+         its border rays (`shadow_rays`: the camera hits' pairs a ray decides, hint first, those \
+         pixels shaded again; the shadow rays of mirror hits belong to `specular`), the reference's \
          shadow rays (its `direct` pass, shading included; rasterized visibility), and the mirror \
          rays of each (`specular`, their hits shaded).\n"
     );
@@ -494,8 +495,8 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             r.scene.clone(),
             n(c.map_decisions),
             format!("{:.1}", per_unit(pass_ms(c, "classify"), c.map_decisions)),
-            n(c.rays.shadow),
-            format!("{:.0}", per_unit(pass_ms(c, "shadow_rays"), c.rays.shadow)),
+            n(c.border_rays),
+            format!("{:.0}", per_unit(pass_ms(c, "shadow_rays"), c.border_rays)),
             n(b.rays.shadow),
             format!("{:.0}", per_unit(pass_ms(b, "direct"), b.rays.shadow)),
             format!(

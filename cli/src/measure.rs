@@ -64,6 +64,10 @@ pub struct Measurement {
     /// Map-based shadows: the (camera hit, light) pairs the classify pass decides per frame
     /// (lit, shadowed, or left to a ray; `LightStats`), summed over the lights.
     pub map_decisions: u64,
+    /// Map-based shadows: the (camera hit, light) pairs a shadow ray decided per frame (the
+    /// border rays of the `shadow_rays` pass; `LightStats::undecided`), summed over the lights.
+    /// The shadow rays of mirror hits are the specular pass's.
+    pub border_rays: u64,
     /// Against the reference film, if one was given.
     pub psnr_db: Option<f64>,
     /// Map-based shadows with a check frame: (pixel, light) pairs whose map decision a shadow
@@ -99,6 +103,10 @@ pub fn cold_first_frame(scene: &Scene, options: Options) -> (Renderer<'_>, Frame
 /// The light maps' memory in `frame` (0 without map-based shadows).
 fn light_map_bytes(frame: &Frame) -> u64 {
     frame.stats.lights.iter().map(|l| l.map_bytes).sum()
+}
+
+fn border_rays(frame: &Frame) -> u64 {
+    frame.stats.lights.iter().map(|l| l.undecided).sum()
 }
 
 fn map_decisions(frame: &Frame) -> u64 {
@@ -148,6 +156,7 @@ pub fn measure(
             light_map_bytes: light_map_bytes(&f),
             vpl_pairs: f.stats.vpl_pairs,
             map_decisions: map_decisions(&f),
+            border_rays: border_rays(&f),
             psnr_db: None,
             wrong_pairs: None,
             wrong_pixels: None,
@@ -171,6 +180,7 @@ pub fn measure(
             out[i].rays = f.stats.rays;
             out[i].light_map_bytes = light_map_bytes(&f);
             out[i].map_decisions = map_decisions(&f);
+            out[i].border_rays = border_rays(&f);
             out[i].film = f.film;
         }
     }

@@ -35,7 +35,7 @@ pub fn run(
     let kr_of = |tri: u32| r.scene.materials[r.scene.material[tri as usize] as usize].mirror;
     // Only hits on mirror materials start a path: skip the others before building their
     // shading point.
-    let mut paths: Vec<Path> = gbuffer
+    let paths: Vec<Path> = gbuffer
         .par_iter()
         .enumerate()
         .filter_map(|(i, hit)| {
@@ -52,12 +52,15 @@ pub fn run(
     // scene or reach a non-mirror end at their bounce.
     let mut bounces: Vec<Vec<Path>> = Vec::new();
     for _ in 0..depth {
-        let traced: Vec<(Vec<Path>, RayCounts)> = paths
-            .par_chunks_mut(256)
+        // Each bounce leaves from the last one's hits (the camera hits first).
+        let from = bounces.last().unwrap_or(&paths);
+        let traced: Vec<(Vec<Path>, RayCounts)> = from
+            .par_chunks(256)
             .map(|chunk| {
                 let mut c = RayCounts::default();
                 let mut live = Vec::with_capacity(chunk.len());
-                for p in chunk.iter_mut() {
+                for p in chunk {
+                    let mut p = *p;
                     let before = c;
                     let next = bounce(r, &p.hit, &mut p.weight, kr_of(p.hit.tri), &mut c);
                     r.pixel_rays.add(p.pixel as usize, &before, &c);
@@ -65,13 +68,13 @@ pub fn run(
                         p.hit = hit;
                         p.dist += hit.t;
                         p.key = morton(hit.p, lo, hi);
-                        live.push(*p);
+                        live.push(p);
                     }
                 }
                 (live, c)
             })
             .collect();
-        let mut next = Vec::with_capacity(paths.len());
+        let mut next = Vec::with_capacity(from.len());
         for (live, c) in traced {
             next.extend(live);
             total += c;
@@ -81,7 +84,6 @@ pub fn run(
         if next.is_empty() {
             break;
         }
-        paths = next.clone();
         bounces.push(next);
     }
     // The light-map pages the hits read that no camera hit did (`mirror_hits`), all bounces'

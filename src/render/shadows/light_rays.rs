@@ -46,9 +46,7 @@ impl Row {
     fn bytes(&self) -> usize {
         self.hits.len() * size_of::<(usize, SurfaceHit)>() + self.rays.len() * size_of::<(u32, u32, Vec3)>()
     }
-}
 
-impl Row {
     /// Row `y` of `gbuffer`: every shading point, and a ray for each light without a map
     /// (`by_rays`) that faces it, unless the pair was decided by a border ray already (its
     /// `und` bit set in `und`, the row's undecided bits: a deferred pixel, shaded with it).

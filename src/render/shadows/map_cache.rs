@@ -85,8 +85,6 @@ impl Renderer<'_> {
         });
         self.maps.framed.store(true, std::sync::atomic::Ordering::Relaxed);
         let paged = self.paged_maps();
-        let budget_bytes = self.options.shadow.map_budget as usize * (1 << 20);
-        let fits = |pages: usize| hyrt_shadowmap::paged_memory_bound(pages) <= budget_bytes;
         // Paged maps: per light, the pages in use and those drawn for this frame.
         let mut page_counts = vec![[0u32; 2]; lights.len()];
         let mut cache = self.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
@@ -156,7 +154,7 @@ impl Renderer<'_> {
                 let fresh = old.is_none();
                 // Over the budget: first drop the pages this view does not read (they are drawn
                 // again if a later view needs them).
-                let evicted = if !fresh && !fits(held + missing.len()) {
+                let evicted = if !fresh && !self.fits_map_budget(held + missing.len()) {
                     let keep: std::collections::HashSet<PageKey> = want.iter().copied().collect();
                     if let Some(m) = cache[l].as_mut() {
                         Arc::make_mut(m).retain_pages(|k| keep.contains(&k));
@@ -286,6 +284,11 @@ impl Renderer<'_> {
             page_counts,
             by_rays,
         }
+    }
+
+    /// Whether a paged map of `pages` pages fits one light's memory budget (`--map-budget`).
+    pub(super) fn fits_map_budget(&self, pages: usize) -> bool {
+        hyrt_shadowmap::paged_memory_bound(pages) <= self.options.shadow.map_budget as usize * (1 << 20)
     }
 
     /// Light `l`'s map of pages `draw` alone (to merge into its cached map), with the triangles'

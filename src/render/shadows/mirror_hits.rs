@@ -77,10 +77,9 @@ impl Shadowing<'_> {
             let mut keys: Vec<u64> = missing.into_iter().flat_map(|m| m.0).collect();
             keys.sort_unstable();
             keys.dedup();
-            let budget = r.options.shadow.map_budget as usize * (1 << 20);
             if keys.is_empty()
                 || keys.len() as f64 * COSTS.page >= horizon * hits_on as f64 * COSTS.ray
-                || hyrt_shadowmap::paged_memory_bound(map.page_count() + keys.len()) > budget
+                || !r.fits_map_budget(map.page_count() + keys.len())
             {
                 continue;
             }

@@ -487,3 +487,45 @@ fn moving_camera_reuses_pages_and_a_moved_light_redraws_its_own() {
     assert_eq!(d(0).cache, Cache::Reused, "{:?}", d(0));
     assert_eq!(d(1).cache, Cache::Built, "{:?}", d(1));
 }
+
+/// Map-space borders refined (`ShadowOptions::refine_borders`, on by default): on the far light
+/// at 100 S, the border pairs that pages up to two levels finer decide cast no ray, so the
+/// frame casts fewer border rays than with refinement off, and its decision says how many pages
+/// were drawn under the borders; the image stays within the accuracy bounds; and a second frame
+/// of the same view, which finds those pages in the cache and decides in classify what the
+/// first frame's refine step decided, gives the same bytes, decisions and rays, drawing none.
+#[test]
+fn refined_borders_cast_fewer_rays_and_every_frame_decides_alike() {
+    let s = far_light_scene(100.0, 320, 240);
+    let mut off = Options::hybrid();
+    off.shadow.refine_borders = 0;
+    let unrefined = render(&s, checked(off));
+    let r = Renderer::new(&s, checked(Options::hybrid()));
+    let first = r.render(&|| {});
+    let second = r.render(&|| {});
+    let (u, f) = (unrefined.stats.lights[0], first.stats.lights[0]);
+    let d = first.stats.decisions.iter().find(|d| d.what == Subject::Light(0)).expect("decision");
+    eprintln!("unrefined {u:?}\nrefined {f:?}\n{d:?}");
+    assert!(
+        f.undecided * 4 < u.undecided * 3,
+        "refined {} border rays, unrefined {}",
+        f.undecided,
+        u.undecided
+    );
+    assert!(d.reason.contains("drawn finer under its borders"), "{d:?}");
+    assert!(f.pages_held > u.pages_held, "no page drawn under the borders: {f:?}");
+
+    let reference = render(&s, Options::reference());
+    let a = accuracy(&s, &reference, &first);
+    eprintln!("refined: {a:?}");
+    assert!(a.psnr_db >= MIN_PSNR_DB, "PSNR {:.2} dB", a.psnr_db);
+    assert!(a.wrong_fraction() <= MAX_WRONG_FRACTION, "{a:?}");
+
+    let bits =
+        |f: &Frame| f.film.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert!(bits(&first) == bits(&second), "the second frame's image differs from the first's");
+    let g = second.stats.lights[0];
+    assert_eq!((g.lit, g.shadowed, g.undecided), (f.lit, f.shadowed, f.undecided));
+    assert_eq!(second.stats.rays, first.stats.rays);
+    assert_eq!(g.pages_drawn, 0, "{g:?}");
+}

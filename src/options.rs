@@ -300,10 +300,6 @@ pub struct ShadowOptions {
     /// none: rays decide its pairs, as the reference's do (`shadows::payoff`). Infinite (the
     /// default): every light gets its map. `hyrt render`, which renders one image, uses 1.
     pub map_horizon: f32,
-    /// Paged maps with border rays: how many levels finer than its own a map-space border
-    /// pair is looked up again, on pages drawn under the borders where they pay
-    /// (`render::shadows::refine`); 0: none.
-    pub refine_borders: u32,
     /// Depth margin in texel footprints (see `hyrt_shadowmap::classify`).
     pub bias: f32,
     pub borders: Borders,
@@ -326,7 +322,6 @@ impl Default for ShadowOptions {
             map_detail: 1.5,
             map_budget: 10,
             map_horizon: f32::INFINITY,
-            refine_borders: 2,
             bias: 1.0,
             borders: Borders::MapSpace,
             dilate: 0,
@@ -581,13 +576,6 @@ pub const KNOBS: &[Knob] = &[
         "Paged light maps with border rays: frames each light's map is expected to serve; a light whose map would cost more than the shadow rays it saves over that many frames gets none, and rays decide it (`inf`: every light gets its map; `hyrt render`, one image, uses 1).",
         positive_or_inf,
         shadow.map_horizon
-    ),
-    knob!(
-        "refine-borders",
-        "LEVELS",
-        "Paged light maps with border rays: how many levels finer than its own a map-space border pair is looked up again, on pages drawn under the borders where they pay over the horizon, before it casts a ray (0: none).",
-        count 0..=4,
-        shadow.refine_borders, slider 0..=4
     ),
     knob!("bias", "B", "Depth margin of map decisions, in texel footprints.", non_negative, shadow.bias, slider 0.0..=4.0),
     knob!(

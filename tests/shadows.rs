@@ -285,15 +285,13 @@ fn smerts_on_conference() {
 /// within the bias band are decided by testing those triangles alone with their shadow ray.
 /// They are exactly border pairs of `--ambiguous rays` (the two modes' undecided and settled
 /// pairs add up to the same borders), they spare their rays, and the image keeps the thesis
-/// scenes' bounds against the reference. Without border refinement: the two modes' borders
-/// differ, so refinement would draw different pages for them, and the sums would not add up.
+/// scenes' bounds against the reference.
 #[test]
 fn ambiguous_borders_settled_by_their_triangles() {
     let mut s = hyrt::scene::load(root().join("scenes/cornell-bunny-mirror.toml").to_str().unwrap()).unwrap();
     (s.settings.width, s.settings.height) = (320, 240);
     let reference = render(&s, Options::reference());
     let mut opts = Options::hybrid();
-    opts.shadow.refine_borders = 0;
     opts.check_visibility = true;
     let rays = render(&s, opts);
     opts.shadow.ambiguous = hyrt::render::Ambiguous::Triangles;

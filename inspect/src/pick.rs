@@ -4,7 +4,7 @@ use glam::Vec3;
 use hyrt::render::{
     Shadows, SurfaceHit,
     light::facing,
-    shadows::{BorderRay, refined_lookup, resolution_guide},
+    shadows::{BorderRay, resolution_guide},
 };
 use hyrt_shadowmap::{
     EMPTY,
@@ -145,10 +145,7 @@ pub fn pick(loaded: &Loaded, r: &Rendered, x: u32, y: u32) -> PixelInfo {
                     point_error: loaded.point_error,
                     cutouts: &loaded.cutouts,
                 };
-                // A border pair may have been decided finer (border refinement).
-                let (c, lookup) =
-                    refined_lookup(&cls, &r.options, s.p, s.tri, c, cls.classify_at(s.p, s.tri, c));
-                let level = c.level;
+                let lookup = cls.classify_at(s.p, s.tri, c);
                 let [tx, ty] = lookup.texel;
                 MapPick {
                     face: c.face,

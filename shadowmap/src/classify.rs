@@ -535,29 +535,6 @@ impl Classifier<'_> {
         ((ix, iy), fp, ids)
     }
 
-    /// The lookup of `p` (on triangle `own`) at the first of the `n` levels finer than `level`
-    /// whose lookup `accept` takes, with its location; `None` if none does (or the map is not
-    /// paged, or `level` is the finest). A paged map's border refinement: a footprint's border
-    /// band is about two texels wide, and each finer level halves it.
-    #[inline]
-    pub fn classify_finer(
-        &self,
-        p: Vec3,
-        own: u32,
-        level: u8,
-        n: u8,
-        mut accept: impl FnMut(&Lookup) -> bool,
-    ) -> Option<(MapCoord, Lookup)> {
-        if !self.map.is_paged() {
-            return None;
-        }
-        (level.saturating_add(1)..=level.saturating_add(n).min(crate::MAX_LEVEL)).find_map(|f| {
-            let c = self.locate_at(p, f);
-            let lk = self.classify_at(p, own, c);
-            accept(&lk).then_some((c, lk))
-        })
-    }
-
     /// [`Classifier::classify`] with `p`'s location `c` from [`Classifier::locate`].
     #[inline]
     pub fn classify_at(&self, p: Vec3, own: u32, c: MapCoord) -> Lookup {

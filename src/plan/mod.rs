@@ -123,17 +123,9 @@ impl Plan {
                 }
                 Shadows::Maps | Shadows::Smerts => {
                     plan.run(Pass::MapBuild, maps);
-                    let refine = if paged && opts.shadows == Shadows::Smerts && sh.refine_borders > 0 {
-                        format!(
-                            "; then map-space border pairs looked up again up to {} level(s) finer, on pages drawn under the borders where they pay",
-                            sh.refine_borders
-                        )
-                    } else {
-                        String::new()
-                    };
                     plan.run(Pass::Classify,
                         format!(
-                            "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions{refine}",
+                            "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions",
                             sh.bias
                         ),
                     );

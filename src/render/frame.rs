@@ -45,9 +45,7 @@ impl Renderer<'_> {
         let maps = run.pass(Pass::MapBuild, |run| self.map_build(&gbuffer, &mut run.stats));
         let mut shadowing = maps.and_then(|maps| {
             run.pass(Pass::Classify, |_| {
-                let mut s = self.classify(&gbuffer, maps, &mut direct, points.as_deref_mut(), progress);
-                s.refine_borders(self, &gbuffer, &mut direct);
-                s
+                self.classify(&gbuffer, maps, &mut direct, points.as_deref_mut(), progress)
             })
         });
         if let Some(s) = &mut shadowing {
@@ -97,11 +95,11 @@ impl Renderer<'_> {
         }) {
             run.stats.rays += rays;
         }
-        if let Some(s) = &shadowing {
-            if self.plan.runs(Pass::Specular) {
-                s.mirror_pages_done(self);
-            }
-            s.report_added_pages(&mut run.stats);
+        if let Some(s) = &shadowing
+            && self.plan.runs(Pass::Specular)
+        {
+            s.mirror_pages_done(self);
+            s.report_mirror_pages(&mut run.stats);
         }
 
         // Compose.

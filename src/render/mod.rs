@@ -230,14 +230,6 @@ impl<'a> Renderer<'a> {
             self.drop_light_maps(needs);
             dropped.push("light maps");
         }
-        if old.shadow != options.shadow
-            || old.shadows != options.shadows
-            || old.visibility != options.visibility
-        {
-            // The borders may differ: the pages under them are looked for again (those drawn
-            // stay).
-            self.forget_border_pages();
-        }
         let (a, b) = (&old.indirect_opts, &options.indirect_opts);
         if a.vpl != b.vpl {
             self.vpl_cache = vpl_cache::VplCache::dropped_because("the VPL knobs changed");

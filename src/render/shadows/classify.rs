@@ -11,7 +11,6 @@ use rayon::prelude::*;
 
 use super::lookup::{classifiers, settle};
 use super::map_cache::FrameMaps;
-use super::refine::{refined_lookup, refines};
 use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, bit, sum_per_light};
 use crate::render::gather::ShadePoint;
 use crate::render::light::{PlaneSides, light_geometry_and_terms, on_viewer_side, reflect, seen_winding};
@@ -85,7 +84,6 @@ impl Renderer<'_> {
         // No light with a map: nothing is decided here, and the occluders' planes and groups
         // (a pass over every triangle, the first time) are not needed at all.
         let no_map = !by_rays.is_empty() && by_rays.iter().all(|&b| b);
-        let refine = refines(self, &resolution);
         let planes: &'r [Plane] = if no_map { &[] } else { self.occluders().0 };
         let cls = if no_map { Vec::new() } else { classifiers(&maps, planes, self) };
         let (groups, shared) = if no_map { (&[][..], &[][..]) } else { self.plane_groups() };
@@ -248,9 +246,6 @@ impl Renderer<'_> {
                     for &(k, m) in &located {
                         let (j, s) = &tile[k];
                         let lk = c.classify_at(s.p, s.tri, m);
-                        // A border pair finer, where its pages are (`refine`).
-                        let lk =
-                            if refine { refined_lookup(c, &self.options, s.p, s.tri, m, lk).1 } else { lk };
                         let settled = settle(self, &lk, s, lights[l].position);
                         let is_lit = settled.unwrap_or(lk.decision == Decision::Lit);
                         if is_lit {
@@ -307,7 +302,7 @@ impl Renderer<'_> {
             })
             .collect();
         let (added, und_counts) = (vec![0; nl], vec![RayCounted::default(); nl]);
-        let (mirror_pages, border_pages) = (vec![0; nl], vec![0; nl]);
+        let mirror_pages = vec![0; nl];
         Shadowing {
             maps,
             bufs,
@@ -320,7 +315,6 @@ impl Renderer<'_> {
             hints,
             by_rays,
             mirror_pages,
-            border_pages,
         }
     }
 }

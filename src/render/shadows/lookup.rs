@@ -59,7 +59,7 @@ pub(super) fn classifier<'m>(map: &'m LightMap, planes: &'m [Plane], r: &'m Rend
 }
 
 /// Light `l`'s decision at `s` by its classifier `cls`, at the level `resolution` gives the
-/// point (paged maps, with border refinement: `refine`; level 0 when `resolution` is empty).
+/// point (paged maps; level 0 when `resolution` is empty).
 pub(super) fn lookup(
     cls: &Classifier,
     resolution: &[Resolution],
@@ -67,13 +67,7 @@ pub(super) fn lookup(
     s: &SurfaceHit,
     r: &Renderer,
 ) -> Lookup {
-    let c = locate(cls, resolution, l, s, r);
-    let lk = cls.classify_at(s.p, s.tri, c);
-    if resolution.is_empty() {
-        lk
-    } else {
-        super::refine::refined_lookup(cls, &r.options, s.p, s.tri, c, lk).1
-    }
+    cls.classify_at(s.p, s.tri, locate(cls, resolution, l, s, r))
 }
 
 /// The occluder a border ray from `s` to light `l` tests first when classify kept no hint for

@@ -8,9 +8,9 @@ use hyrt_shadowmap::{LightMap, MapKind, PageKey, map::Holes};
 use hyrt_tracer::Hit;
 use rayon::prelude::*;
 
-use super::{ShadowBuffers, Shadowing, lookup::sees_hole, marking::Needs};
+use super::{ShadowBuffers, lookup::sees_hole, marking::Needs};
 use crate::render::runner::timed;
-use crate::render::{Cache, CutoutMaps, FrameDecision, FrameStats, LightMaps, Renderer, Run, Subject};
+use crate::render::{Cache, CutoutMaps, FrameDecision, LightMaps, Renderer, Run, Subject};
 
 /// Per-renderer state of map-based shadows: the light maps and the per-pixel buffers, recycled
 /// from frame to frame.
@@ -32,10 +32,6 @@ pub(crate) struct MapCache {
     /// not worth it): the same view's mirror hits are the same, so later frames need not look
     /// (`mirror_hits`). Forgotten with `needed`.
     pub(super) mirror_marked: std::sync::atomic::AtomicBool,
-    /// Whether a frame of this view has drawn the finer pages its border pairs read (or found
-    /// them not worth it): later frames read them in classify (`refine`). Forgotten with
-    /// `needed`.
-    pub(super) border_marked: std::sync::atomic::AtomicBool,
 }
 
 /// A paged light map's pages to draw for a frame ([`Renderer::light_maps`]).
@@ -332,81 +328,20 @@ impl Renderer<'_> {
         self.maps.maps.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
         // The mirror hits' pages went with the maps.
         *self.maps.mirror_marked.get_mut() = false;
-        *self.maps.border_marked.get_mut() = false;
         if needs_changed {
             self.forget_needed_faces();
         }
-    }
-
-    /// Forgets that this view's border pairs have looked for their finer pages (`refine`).
-    pub(crate) fn forget_border_pages(&mut self) {
-        *self.maps.border_marked.get_mut() = false;
     }
 
     /// Forgets which light-map faces camera hits fall on (the camera moved), keeping the maps.
     pub(crate) fn forget_needed_faces(&mut self) {
         self.maps.needed = std::sync::OnceLock::new();
         *self.maps.mirror_marked.get_mut() = false;
-        *self.maps.border_marked.get_mut() = false;
     }
 
     /// Light `l`'s cached map (for inspection), once a frame has built it; faces no camera hit
     /// falls on are not drawn ([`LightMap::faces_drawn`]).
     pub fn light_map(&self, l: usize) -> Option<Arc<LightMap>> {
         self.maps.maps.lock().unwrap_or_else(|e| e.into_inner()).get(l).cloned().flatten()
-    }
-}
-
-impl Shadowing<'_> {
-    /// Draws pages `keys` (packed [`PageKey`]s, sorted) of light `l`'s paged map, with the
-    /// triangles' plane `groups`, after the map-build pass (for mirror hits, for borders), and
-    /// merges them into the frame's map and the renderer's cache. Returns how many.
-    pub(super) fn extend_map(&mut self, r: &Renderer, l: usize, keys: Vec<u64>, groups: &[u32]) -> u32 {
-        let keys: Vec<PageKey> = keys.into_iter().map(PageKey::unpack).collect();
-        let drawn = r.draw_pages(l, &keys, groups);
-        // The cache's copy let go first, so that the merge does not copy the whole map.
-        let mut cache = r.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(slot) = cache.get_mut(l) {
-            *slot = None;
-        }
-        Arc::make_mut(&mut self.maps[l]).merge(drawn);
-        if let Some(slot) = cache.get_mut(l) {
-            *slot = Some(self.maps[l].clone());
-        }
-        keys.len() as u32
-    }
-
-    /// Adds the pages drawn after the map-build pass, for borders
-    /// ([`Shadowing::refine_borders`]) and for mirror hits ([`Shadowing::draw_mirror_pages`]),
-    /// to `stats`: each such light's counts, and its decision, which says so (a map only
-    /// reused for the camera hits was extended, and counts as built).
-    pub(crate) fn report_added_pages(&self, stats: &mut FrameStats) {
-        for l in 0..self.maps.len() {
-            let (b, m) = (self.border_pages[l], self.mirror_pages[l]);
-            if b + m == 0 {
-                continue;
-            }
-            if let Some(st) = stats.lights.get_mut(l) {
-                st.pages_drawn += b + m;
-                st.pages_used += b + m;
-                st.pages_held = self.maps[l].page_count() as u32;
-                st.map_bytes = self.maps[l].memory_bytes() as u64;
-                // A border pair whose own page was absent may be refined onto a face no camera
-                // hit's page is on.
-                st.faces_drawn = self.maps[l].faces_drawn().iter().filter(|&&f| f).count() as u32;
-            }
-            if let Some(d) = stats.decisions.iter_mut().find(|d| d.what == Subject::Light(l)) {
-                if b > 0 {
-                    d.reason.push_str(&format!("; {b} page(s) drawn finer under its borders"));
-                }
-                if m > 0 {
-                    d.reason.push_str(&format!("; {m} page(s) drawn for mirror hits"));
-                }
-                if d.cache == Cache::Reused {
-                    d.cache = Cache::Extended;
-                    stats.maps_built += 1;
-                }
-            }
-        }
     }
 }

@@ -11,10 +11,10 @@
 //! view path ([`level_along`]). The frames after reuse these pages, as they reuse the camera's,
 //! and do not look again (`MapCache::mirror_marked`).
 
-use std::sync::atomic::Ordering::Relaxed;
+use std::sync::{Arc, atomic::Ordering::Relaxed};
 
 use hyrt_shadowmap::{
-    LightMap,
+    LightMap, PageKey,
     classify::{Decision, Lookup},
     paged::{self, PageRect},
 };
@@ -25,7 +25,7 @@ use super::Shadowing;
 use super::lookup::{classifier, level_along, settle};
 use super::payoff::COSTS;
 use crate::render::light::facing;
-use crate::render::{MirrorShadows, Renderer, Shadows, SurfaceHit};
+use crate::render::{Cache, FrameStats, MirrorShadows, Renderer, Shadows, Subject, SurfaceHit};
 
 impl Shadowing<'_> {
     /// Draws, for each light with a paged map, the pages that the mirror hits `hits` read (each
@@ -83,8 +83,19 @@ impl Shadowing<'_> {
             {
                 continue;
             }
+            let keys: Vec<PageKey> = keys.into_iter().map(PageKey::unpack).collect();
             let groups = *groups.get_or_insert_with(|| r.plane_groups().0);
-            self.mirror_pages[l] += self.extend_map(r, l, keys, groups);
+            let drawn = r.draw_pages(l, &keys, groups);
+            // The cache's copy let go first, so that the merge does not copy the whole map.
+            let mut cache = r.maps.maps.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(slot) = cache.get_mut(l) {
+                *slot = None;
+            }
+            Arc::make_mut(&mut self.maps[l]).merge(drawn);
+            if let Some(slot) = cache.get_mut(l) {
+                *slot = Some(self.maps[l].clone());
+            }
+            self.mirror_pages[l] += keys.len() as u32;
         }
     }
 
@@ -92,6 +103,30 @@ impl Shadowing<'_> {
     /// ([`Shadowing::draw_mirror_pages`]).
     pub(crate) fn mirror_pages_done(&self, r: &Renderer) {
         r.maps.mirror_marked.store(true, Relaxed);
+    }
+
+    /// Adds the pages drawn for mirror hits ([`Shadowing::draw_mirror_pages`]) to `stats`: each
+    /// such light's counts, and its decision, which says so (a map only reused for the camera
+    /// hits was extended, and counts as built).
+    pub(crate) fn report_mirror_pages(&self, stats: &mut FrameStats) {
+        for (l, &n) in self.mirror_pages.iter().enumerate() {
+            if n == 0 {
+                continue;
+            }
+            if let Some(st) = stats.lights.get_mut(l) {
+                st.pages_drawn += n;
+                st.pages_used += n;
+                st.pages_held = self.maps[l].page_count() as u32;
+                st.map_bytes = self.maps[l].memory_bytes() as u64;
+            }
+            if let Some(d) = stats.decisions.iter_mut().find(|d| d.what == Subject::Light(l)) {
+                d.reason.push_str(&format!("; {n} page(s) drawn for mirror hits"));
+                if d.cache == Cache::Reused {
+                    d.cache = Cache::Extended;
+                    stats.maps_built += 1;
+                }
+            }
+        }
     }
 
     /// Light `l`'s map decision at `s`, seen at the end of a view path `dist` long, at the

@@ -44,7 +44,6 @@ mod map_cache;
 mod marking;
 mod mirror_hits;
 mod payoff;
-mod refine;
 
 use std::sync::Arc;
 
@@ -64,7 +63,6 @@ use super::{Renderer, SurfaceHit};
 pub(crate) use lookup::sees_hole;
 pub(crate) use map_cache::MapCache;
 pub use marking::resolution_guide;
-pub use refine::refined_lookup;
 
 /// Per-light classification counts of one frame (camera hits only).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -224,9 +222,6 @@ pub struct Shadowing<'r> {
     pub(crate) by_rays: Vec<bool>,
     /// Per light, the pages drawn for mirror hits this frame ([`Shadowing::draw_mirror_pages`]).
     pub(crate) mirror_pages: Vec<u32>,
-    /// Per light, the pages drawn one level finer under its borders this frame
-    /// ([`Shadowing::refine_borders`]).
-    pub(crate) border_pages: Vec<u32>,
 }
 
 /// A map-space border pair's pixel and the occluder hint its map lookup found.

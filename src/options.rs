@@ -121,6 +121,24 @@ choice! {
 }
 
 choice! {
+    /// How a (point, light) pair is decided whose map footprint is a border only because of
+    /// triangles that share a vertex with the point's own (a curved mesh's facets past its
+    /// own, whose planes cross the ray to the light; a crease): see
+    /// `hyrt_shadowmap::classify::Lookup::occluders`.
+    #[derive(Default)]
+    pub enum Neighbours {
+        /// Those triangles (up to four) tested with the point's shadow ray alone: blocked if one
+        /// is hit (the reference's ray would meet it), else lit, as the map decides wherever the
+        /// texels around a point hold no occluder; what it misses is an occluder that no texel
+        /// of the footprint holds.
+        #[default]
+        Triangles = "triangles",
+        /// A whole shadow ray (a border pair, as the thesis's SMeRTS).
+        Rays = "rays",
+    }
+}
+
+choice! {
     /// How shadows are decided at mirror hits (which have no screen neighbours).
     #[derive(Default)]
     pub enum MirrorShadows {
@@ -307,6 +325,7 @@ pub struct ShadowOptions {
     pub dilate: u32,
     pub mirror: MirrorShadows,
     pub ambiguous: Ambiguous,
+    pub neighbours: Neighbours,
     /// How light maps hold alpha cut-outs.
     pub cutouts: CutoutMaps,
 }
@@ -327,6 +346,7 @@ impl Default for ShadowOptions {
             dilate: 0,
             mirror: MirrorShadows::default(),
             ambiguous: Ambiguous::default(),
+            neighbours: Neighbours::default(),
             cutouts: CutoutMaps::default(),
         }
     }
@@ -601,6 +621,13 @@ pub const KNOBS: &[Knob] = &[
         shadow.ambiguous
     ),
     knob!(
+        "neighbours",
+        "MODE",
+        "SMeRTS: a pair whose map footprint is a border only because of triangles sharing a vertex with its own (a curved mesh's facets, a crease): `triangles` tests those triangles alone with its shadow ray (blocked if one is hit, else lit, as the map decides elsewhere), `rays` casts the whole shadow ray.",
+        choice Neighbours,
+        shadow.neighbours
+    ),
+    knob!(
         "cutout-maps",
         "MODE",
         "Alpha cut-outs in paged light maps: `texels` (each texel's centre tested: holes hold what lies behind; borders go to rays) or `rays` (drawn solid; every point a cut-out would shadow gets its ray).",
@@ -742,6 +769,7 @@ mod tests {
         check::<Borders>();
         check::<MirrorShadows>();
         check::<Ambiguous>();
+        check::<Neighbours>();
         check::<Indirect>();
         check::<Preset>();
         check::<MapKind>();

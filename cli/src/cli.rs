@@ -243,7 +243,7 @@ fn render(a: &RenderArgs) -> Result<()> {
         };
         let settled = match s.by_suspects {
             0 => String::new(),
-            n => format!(", {n} of those settled by their ambiguous triangles"),
+            n => format!(", {n} of those borders settled by testing their triangles alone"),
         };
         say(format!(
             "light {l}: {} lit, {} shadowed{settled}, {} undecided (rays){wrong}; {} map face(s), {} page(s) held ({} drawn), {:.1} MB",

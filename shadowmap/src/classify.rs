@@ -233,6 +233,14 @@ pub struct Lookup {
     /// ray's answer unless an occluder no texel of the footprint holds blocks it (what
     /// resolution buys, as for every map decision).
     pub suspects: [u32; 2],
+    /// For a border ([`Lookup::map_border`]): the distinct triangles of the texel and its
+    /// footprint that did not decide lit, up to four, [`EMPTY`]-padded; all [`EMPTY`] when
+    /// there are more, when one is a cut-out, when the footprint leaves the face, and for a
+    /// lookup that is no border. The texels hold the nearest surface in their directions, so
+    /// an occluder of the point that none of these is lies in no texel of the footprint:
+    /// testing them alone with the point's shadow ray decides it as the map decides every
+    /// point, exactly when one blocks it.
+    pub occluders: [u32; 4],
     /// Face and texel of the decision (for inspection).
     pub face: u8,
     pub texel: [u32; 2],
@@ -554,6 +562,7 @@ impl Classifier<'_> {
                 map_border: true,
                 ambiguous: false,
                 suspects: [EMPTY; 2],
+                occluders: [EMPTY; 4],
                 face: c.face,
                 texel,
             };
@@ -568,6 +577,7 @@ impl Classifier<'_> {
                 map_border: false,
                 ambiguous: false,
                 suspects: [EMPTY; 2],
+                occluders: [EMPTY; 4],
                 face: c.face,
                 texel,
             };
@@ -623,7 +633,13 @@ impl Classifier<'_> {
         // meet an occluder that no texel holds.
         let (mut amb, mut na) = ([centre, EMPTY], usize::from(d == AMBIGUOUS));
         let mut settles = d != SHADOW && d != CUTOUT && in_domain;
-        if in_domain && (!map_border || settles) {
+        let (mut occ, mut no) = ([EMPTY; 4], 0usize);
+        let mut occ_ok = in_domain && d != CUTOUT;
+        if d != LIT {
+            occ[0] = centre;
+            no = 1;
+        }
+        if in_domain {
             // Most footprints see one or two triangles: decide each once.
             let (mut seen, mut n) = ([centre, EMPTY, EMPTY, EMPTY], 1);
             for (&id, &xy) in foot_ids.iter().zip(&foot) {
@@ -634,6 +650,14 @@ impl Classifier<'_> {
                 n += 1;
                 let d = decide(id, xy);
                 map_border |= d != decision as u8;
+                if d != LIT && !occ[..no].contains(&id) {
+                    if d == CUTOUT || no == 4 {
+                        occ_ok = false;
+                    } else {
+                        occ[no] = id;
+                        no += 1;
+                    }
+                }
                 if d != LIT && hint == EMPTY {
                     hint = id;
                 }
@@ -648,7 +672,17 @@ impl Classifier<'_> {
             }
         }
         let suspects = if map_border && settles && na > 0 { [amb[0], amb[1]] } else { [EMPTY; 2] };
-        Lookup { decision, hint, map_border, ambiguous: d == AMBIGUOUS, suspects, face: c.face, texel }
+        let occluders = if map_border && occ_ok { occ } else { [EMPTY; 4] };
+        Lookup {
+            decision,
+            hint,
+            map_border,
+            ambiguous: d == AMBIGUOUS,
+            suspects,
+            occluders,
+            face: c.face,
+            texel,
+        }
     }
 
     /// Whether triangle `id` has holes ([`Classifier::cutouts`]).

@@ -39,8 +39,8 @@ pub use surface::SurfaceHit;
 use crate::{camera::CameraRays, film::Film, plan::Plan, scene::Scene};
 
 pub use crate::options::{
-    Ambiguous, Borders, CutoutMaps, Indirect, LightMaps, MirrorShadows, Options, ShadowOptions, Shadows,
-    Visibility,
+    Ambiguous, Borders, CutoutMaps, Indirect, LightMaps, MirrorShadows, Neighbours, Options, ShadowOptions,
+    Shadows, Visibility,
 };
 
 /// Per-frame statistics.

@@ -296,6 +296,10 @@ impl Inspector {
                         }
                     ),
                     _ if lp.undecided => "undecided, but no ray recorded".to_string(),
+                    // A border with no ray: its few triangles were tested alone with the ray.
+                    _ if lp.map.as_ref().is_some_and(|m| m.lookup.map_border) => {
+                        "no ray: a border settled by its triangles alone".to_string()
+                    }
                     _ => "no ray: the map decided".to_string(),
                 };
                 lines.push(ray);

@@ -11,22 +11,48 @@ use hyrt_shadowmap::{
 };
 use hyrt_tracer::spawn_ray_to;
 
-use crate::render::{Ambiguous, Renderer, Shadows, SurfaceHit};
+use crate::render::{Ambiguous, Neighbours, Renderer, Shadows, SurfaceHit};
 
-/// Under SMeRTS with `Ambiguous::Triangles`, whether light `light` reaches `s` when its lookup
-/// `lk` names suspects ([`Lookup::suspects`]): its shadow ray, made as the reference makes it,
-/// tested against those triangles alone (with the tracer's watertight test, so that each
-/// answers as it would in a traversal): lit unless one blocks it. `None` otherwise (the map's
-/// decision stands, or a whole ray decides a border).
+/// Under SMeRTS, whether light `light` reaches `s` when its lookup `lk` is a border that a
+/// few triangles explain, tested alone with its shadow ray (made as the reference makes it,
+/// with the tracer's watertight test, so that each answers as it would in a traversal): lit
+/// unless one blocks it. Those triangles are
+/// - with `Ambiguous::Triangles`, the one or two within the bias band ([`Lookup::suspects`]);
+/// - with `Neighbours::Triangles`, the footprint's occluders ([`Lookup::occluders`]) when each
+///   shares a vertex with the point's own triangle: a curved mesh's facets next to its own,
+///   whose planes cross the ray to the light over the point though the facets themselves may
+///   not, a border on every lit part of the mesh near its terminator.
+///
+/// A blocked answer is the reference's. A lit one is the map's kind of answer: the texels
+/// around the point's direction hold those triangles and no other occluder, so what the ray
+/// could still meet is an occluder no texel of the footprint holds, which a lit decision
+/// anywhere else misses too. `None` otherwise: the map's decision stands, or a whole ray
+/// decides a border.
 pub(super) fn settle(r: &Renderer, lk: &Lookup, s: &SurfaceHit, light: Vec3) -> Option<bool> {
-    if lk.suspects[0] == EMPTY
-        || r.options.shadows != Shadows::Smerts
-        || r.options.shadow.ambiguous != Ambiguous::Triangles
-    {
+    if !lk.map_border || r.options.shadows != Shadows::Smerts {
         return None;
     }
+    let o = &r.options.shadow;
+    let tris: &[u32] = if lk.suspects[0] != EMPTY && o.ambiguous == Ambiguous::Triangles {
+        &lk.suspects
+    } else if lk.occluders[0] != EMPTY
+        && o.neighbours == Neighbours::Triangles
+        && lk.occluders.iter().all(|&t| t == EMPTY || shares_vertex(r, s.tri, t))
+    {
+        &lk.occluders
+    } else {
+        return None;
+    };
     let ray = spawn_ray_to(s.p, s.p_err, s.ng, light);
-    Some(!lk.suspects.iter().any(|&t| t != EMPTY && r.tracer.hits_triangle(t, &ray).is_some()))
+    Some(!tris.iter().any(|&t| t != EMPTY && r.tracer.hits_triangle(t, &ray).is_some()))
+}
+
+/// Whether triangles `a` and `b` share a vertex (by position: meshes are stored as triangle
+/// soups).
+#[inline]
+fn shares_vertex(r: &Renderer, a: u32, b: u32) -> bool {
+    let (pa, pb) = (&r.scene.positions[a as usize], &r.scene.positions[b as usize]);
+    pa.iter().any(|v| pb.contains(v))
 }
 
 /// Whether the ray from `origin` in direction `dir` meets triangle `id` (one with a cut-out) in

@@ -75,9 +75,11 @@ pub struct LightStats {
     /// Of `lit` and `shadowed`, the hits decided with the rest of their 8x8 tile at once, from
     /// the map region under the tile's corners (`Classifier::hull`), not point by point.
     pub by_tile: u64,
-    /// Of `lit` and `shadowed`, the hits whose footprint was a border only because of
-    /// occluders within the bias band, decided by testing those triangles alone with the
-    /// hit's shadow ray (`Ambiguous::Triangles`; `Lookup::suspects`), not by a whole ray.
+    /// Of `lit` and `shadowed`, the hits whose footprint was a border only because of a few
+    /// triangles, decided by testing those alone with the hit's shadow ray, not by a whole
+    /// ray (`lookup::settle`): occluders within the bias band (`Ambiguous::Triangles`;
+    /// `Lookup::suspects`), or triangles sharing a vertex with the hit's own
+    /// (`Neighbours::Triangles`; `Lookup::occluders`).
     pub by_suspects: u64,
     /// Map faces drawn for this light (cube: of 6, paraboloid: of 2).
     pub faces_drawn: u32,

@@ -237,3 +237,24 @@ fn passes_read_what_earlier_passes_wrote_and_frames_run_the_plan() {
     }
     assert_eq!(checked, 18);
 }
+
+/// The classify pass says when it settles borders by their few triangles: by default the
+/// borders that only the point's neighbouring facets make; with `--neighbours rays`, none (and
+/// with `--ambiguous triangles` as well, the bias band's); without border rays, never.
+#[test]
+fn classify_says_which_borders_it_settles() {
+    let s = cornell(32, 24);
+    let reason = |o: Options| {
+        let r = Renderer::new(&s, o);
+        r.plan.run.iter().find(|d| d.pass == Pass::Classify).expect("classify runs").reason.clone()
+    };
+    assert!(reason(Options::hybrid()).contains("neighbouring facets"), "{}", reason(Options::hybrid()));
+    let mut o = Options::hybrid();
+    o.shadow.neighbours = hyrt::render::Neighbours::Rays;
+    assert!(!reason(o).contains("settled"), "{}", reason(o));
+    o.shadow.ambiguous = hyrt::render::Ambiguous::Triangles;
+    assert!(reason(o).contains("bias band") && !reason(o).contains("neighbouring"), "{}", reason(o));
+    let mut maps = Options::hybrid();
+    maps.shadows = hyrt::render::Shadows::Maps;
+    assert!(!reason(maps).contains("settled"), "{}", reason(maps));
+}

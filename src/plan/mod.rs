@@ -123,9 +123,27 @@ impl Plan {
                 }
                 Shadows::Maps | Shadows::Smerts => {
                     plan.run(Pass::MapBuild, maps);
+                    // Borders that a few triangles explain, settled in classify by testing those
+                    // alone with the pair's ray (`render::shadows::lookup::settle`).
+                    let smerts = opts.shadows == Shadows::Smerts;
+                    let settled = match (
+                        smerts && sh.neighbours == crate::options::Neighbours::Triangles,
+                        smerts && sh.ambiguous == crate::options::Ambiguous::Triangles,
+                    ) {
+                        (false, false) => "",
+                        (true, false) => {
+                            "; borders that only the point's neighbouring facets make settled by testing those alone with its ray"
+                        }
+                        (false, true) => {
+                            "; borders that only occluders within the bias band make settled by testing those alone with its ray"
+                        }
+                        (true, true) => {
+                            "; borders that only the point's neighbouring facets or occluders within the bias band make settled by testing those alone with its ray"
+                        }
+                    };
                     plan.run(Pass::Classify,
                         format!(
-                            "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions",
+                            "tile by tile: shading points, every light's map decision (bias {} texel footprints), and direct light ({highlights}) from those decisions{settled}",
                             sh.bias
                         ),
                     );

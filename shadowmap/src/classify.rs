@@ -639,7 +639,9 @@ impl Classifier<'_> {
             occ[0] = centre;
             no = 1;
         }
-        if in_domain {
+        // (A border already, and not settled: a cut-out or a footprint off the face, which
+        // names no occluders either.)
+        if in_domain && (!map_border || settles) {
             // Most footprints see one or two triangles: decide each once.
             let (mut seen, mut n) = ([centre, EMPTY, EMPTY, EMPTY], 1);
             for (&id, &xy) in foot_ids.iter().zip(&foot) {

@@ -13,7 +13,10 @@
 //! error of `((e^3 + (1 - e)^3) / 3)`, `1/6` texel on average: two thirds of it. (In absolute
 //! error the ramp is worse, `1/3` against `1/4`: PSNR is a squared-error measure.)
 
-use glam::{DVec3, Vec3};
+mod common;
+
+use common::blocks;
+use glam::Vec3;
 use hyrt_shadowmap::{
     LightMap, MapKind, MapOptions,
     classify::{Classifier, triangle_planes},
@@ -22,25 +25,6 @@ use hyrt_shadowmap::{
 /// Two triangles of the quad `c + (+-1) a + (+-1) b`.
 fn quad(c: Vec3, a: Vec3, b: Vec3) -> [[Vec3; 3]; 2] {
     [[c - a - b, c + a - b, c + a + b], [c - a - b, c + a + b, c - a + b]]
-}
-
-/// Whether the segment from `o` to `p` crosses triangle `tri` strictly between them (`f64`
-/// Möller-Trumbore).
-fn blocks(o: DVec3, p: DVec3, tri: &[Vec3; 3]) -> bool {
-    let [v0, v1, v2] = tri.map(|v| v.as_dvec3());
-    let (e1, e2) = (v1 - v0, v2 - v0);
-    let d = p - o;
-    let q = d.cross(e2);
-    let det = e1.dot(q);
-    if det == 0.0 {
-        return false;
-    }
-    let s = o - v0;
-    let u = s.dot(q) / det;
-    let r = s.cross(e1);
-    let v = d.dot(r) / det;
-    let t = e2.dot(r) / det;
-    (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && t > 1e-9 && t < 1.0 - 1e-9
 }
 
 #[test]

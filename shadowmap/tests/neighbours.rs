@@ -5,30 +5,14 @@
 //! vertex with the point's own triangle, none of them blocks the point's segment to the light
 //! (an exact `f64` test): testing them alone decides the point lit, as the truth is.
 
-use glam::{DVec3, Vec3};
+mod common;
+
+use common::blocks;
+use glam::Vec3;
 use hyrt_shadowmap::{
     EMPTY, LightMap, MapKind, MapOptions,
     classify::{Classifier, triangle_planes},
 };
-
-/// Whether the segment from `o` to `p` crosses triangle `tri` strictly between them (`f64`
-/// Möller-Trumbore).
-fn blocks(o: DVec3, p: DVec3, tri: &[Vec3; 3]) -> bool {
-    let [v0, v1, v2] = tri.map(|v| v.as_dvec3());
-    let (e1, e2) = (v1 - v0, v2 - v0);
-    let d = p - o;
-    let q = d.cross(e2);
-    let det = e1.dot(q);
-    if det == 0.0 {
-        return false;
-    }
-    let s = o - v0;
-    let u = s.dot(q) / det;
-    let r = s.cross(e1);
-    let v = d.dot(r) / det;
-    let t = e2.dot(r) / det;
-    (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && t > 1e-9 && t < 1.0 - 1e-9
-}
 
 #[test]
 fn a_convex_meshs_borders_name_neighbours_that_do_not_block() {

@@ -323,28 +323,25 @@ impl Classifier<'_> {
     /// are `res / 2` texels per unit), plus one texel for the coordinates' own rounding. That
     /// box must stay inside the face ([`LightMap::region_id`] then says what it sees):
     ///
-    /// - nothing, or only `own`, or only triangles of `own`'s group `Some(g)` (its coplanar
-    ///   triangles, in a map made by
-    ///   [`LightMap::build_grouped`](crate::LightMap::build_grouped)): every footprint decides
-    ///   lit, so the points are lit (for coplanar neighbours, given the condition in the code);
-    /// - only another triangle `T` (or only triangles of another group, which share `T`'s
-    ///   plane to the bit): every texel of every footprint decides by `T`'s plane.
-    ///   From the light `L`, the ray towards `p` meets it at `t = r D / g(p)`, with `r = |p -
-    ///   L|`, `D` the plane's offset from `L` and `g(p) = n . (p - L)`, which is linear in `p`:
-    ///   `t / r = D / g` takes its extremes over the hull at the corners. The points are
-    ///   shadowed with no border when, at every corner (`g` widened by the points' offsets),
-    ///   `D / g` lies strictly between the near limit `SHADOW_EPSILON` and `1 - margin / r`,
-    ///   where `margin / r <= 2 bias / res + TOLERANCE + 2 sqrt(3) e / h` (a texel subtends at
-    ///   most `2 / res`, and the rounding band over `r` is `sqrt(3) e (1 / r + 1 / h)` with
-    ///   `r >= h`), each side with a relative slack of `1e-4` for the rounding of the per-point
-    ///   arithmetic; and `|g| / r` stays above the `1e-6` below which the per-point test reads
-    ///   the stored depth instead (`r` is largest at a corner: it is convex).
+    /// - nothing, or only `own`, or only triangles of `own`'s plane (its group `Some(g)`, in a
+    ///   map made by [`LightMap::build_grouped`](crate::LightMap::build_grouped), or any
+    ///   triangle whose [`Plane`] is `own`'s to the bit): every footprint decides lit, as the
+    ///   per-point test calls a triangle of the point's very plane lit;
+    /// - other triangles: each texel of every footprint decides by its triangle's plane, and
+    ///   [`Classifier::over_hull`] finds when a plane decides the same for every point of the
+    ///   hull (lit, or shadowed with no bias band). When every triangle seen decides lit, or
+    ///   every one shadowed, so does every footprint, with no border. The summaries say which
+    ///   triangles the box sees where one triangle (or one group of a plane) fills it;
+    ///   otherwise its texels are read ([`LightMap::region_ids`]).
     ///
+    /// At most [`HULL_CORNERS`] corners (more: [`Hull::Unknown`]).
     /// The corners are located at level `level` (0 for whole maps), and the region read there.
     /// Paraboloid maps are not central projections: always [`Hull::Unknown`].
     pub fn hull(&self, corners: &[Vec3], own: u32, group: Option<u32>, level: u8) -> Hull {
         let map = self.map;
-        let Some(first) = corners.first() else { return Hull::Unknown };
+        let Some(first) = corners.first().filter(|_| corners.len() <= HULL_CORNERS) else {
+            return Hull::Unknown;
+        };
         let Some(pl) = self.planes.get(own as usize) else { return Hull::Unknown };
         if map.kind() != MapKind::Cube || pl.n == Vec3::ZERO {
             return Hull::Unknown;
@@ -375,53 +372,103 @@ impl Classifier<'_> {
             return Hull::Unknown;
         }
         let (x0, y0, x1, y1) = (x0 as u32, y0 as u32, x1 as u32, y1 as u32);
-        let seen = match map.region_id(c0.face, level, x0, y0, x1, y1) {
-            Some(id) if id == EMPTY || id == own => return Hull::Lit,
-            Some(id) => id,
-            // Several triangles: perhaps all of one plane (own's, or an occluder's).
-            None => match map.region_group(c0.face, level, x0, y0, x1, y1) {
-                Some(g) if Some(g) == group => {
-                    // Texels of other triangles of `own`'s group lie on its very plane: they
-                    // meet the ray towards a point `p` at `t` with `r - t <= r d / (h - d)`
-                    // for `p`'s offset `d` from the plane, which is at most `sqrt(3)` times
-                    // the point's rounding (the barycentrics' own error moves it along the
-                    // plane, not off it); within the tolerance when `d / h` is, with a
-                    // factor 2 of slack. And the plane is not seen edge-on (`|n . dir| = h /
-                    // r` stays above the `1e-6` below which the stored depth would decide).
-                    let d = 3f32.sqrt() * self.point_error;
-                    let r_max = corners.iter().map(|&p| (p - light).length()).fold(0.0, f32::max) + e;
-                    let flat = 2.0 * d < 0.5 * TOLERANCE * h && h / r_max > 2e-6;
-                    return if flat { Hull::Lit } else { Hull::Unknown };
+        let far = 1.0 - (2.0 * self.bias / res + TOLERANCE + 2.0 * e / h) as f64;
+        let hc = HullCorners::new(corners, light, e);
+        // What every texel holding `id` decides for every point (see `Classifier::over_hull`).
+        let judge = |id: u32| -> Hull {
+            if id == EMPTY || id == own {
+                return Hull::Lit;
+            }
+            match self.planes.get(id as usize) {
+                // A triangle of the points' very plane cannot shadow them.
+                Some(occ) if *occ == *pl => Hull::Lit,
+                Some(occ) if occ.n != Vec3::ZERO && id != ABSENT => {
+                    self.over_hull(occ, self.has_holes(id), &hc, far)
                 }
-                // One occluder plane: its triangles share its `Plane` to the bit.
-                Some(g) if g != EMPTY => g,
-                _ => return Hull::Unknown,
-            },
+                _ => Hull::Unknown,
+            }
         };
-        // A cut-out's holes are not in the map (nor, when `seen` stands for a group, in its
-        // members: groups never mix triangles with and without holes, `plane_groups`).
-        let Some(occ) = self.planes.get(seen as usize).filter(|o| o.n != Vec3::ZERO && !self.has_holes(seen))
-        else {
+        match map.region_id(c0.face, level, x0, y0, x1, y1) {
+            Some(id) => return judge(id),
+            // Several triangles: perhaps all of one plane (own's, or an occluder's), whose
+            // group's first triangle has their plane, and their holes (`plane_groups`).
+            None => match map.region_group(c0.face, level, x0, y0, x1, y1) {
+                Some(g) if Some(g) == group => return Hull::Lit,
+                Some(g) => return judge(g),
+                None => {}
+            },
+        }
+        // Several planes: every triangle seen must decide the same for every point. Runs of
+        // texels repeat ids: the last few verdicts are kept.
+        let (mut lit, mut shadowed) = (false, false);
+        let mut known = [(EMPTY, Hull::Lit); 4];
+        let mut next = 0;
+        let agreed = map.region_ids(c0.face, level, x0, y0, x1, y1, |id| {
+            let verdict = match known.iter().find(|k| k.0 == id) {
+                Some(k) => k.1,
+                None => {
+                    let v = judge(id);
+                    known[next] = (id, v);
+                    next = (next + 1) % known.len();
+                    v
+                }
+            };
+            lit |= verdict == Hull::Lit;
+            shadowed |= verdict == Hull::Shadowed;
+            verdict != Hull::Unknown && !(lit && shadowed)
+        });
+        match (agreed, lit, shadowed) {
+            (true, true, false) => Hull::Lit,
+            (true, false, true) => Hull::Shadowed,
+            _ => Hull::Unknown,
+        }
+    }
+
+    /// What a texel holding a triangle of plane `occ` (not the points' own; `holes` if it has
+    /// holes) decides for every point of [`Classifier::hull`]'s hull of `corners` (its bounds:
+    /// `e` the points' offset from the hull, `far` the margin's limit): [`Hull::Shadowed`] when
+    /// every point is shadowed by it with no bias band, [`Hull::Lit`] when it blocks none
+    /// (it meets every point's ray from the light beyond the point, or behind the light),
+    /// else [`Hull::Unknown`].
+    ///
+    /// From the light `L`, the ray towards `p` meets the plane at `t = r D / g(p)`, with `r =
+    /// |p - L|`, `D` the plane's offset from `L` and `g(p) = n . (p - L)`, which is linear in
+    /// `p`: where `g` keeps its sign over the hull, `t / r = D / g` takes its extremes at the
+    /// corners (`g` widened by the points' offsets `e`, `|n| = 1`). The per-point test calls
+    /// the texel lit when `t <= SHADOW_EPSILON r` or `t >= r - 1e-6 r / |n . dir|`
+    /// ([`DIRECTION_ROUNDING`]); `t / r >= 1 - 1e-7` at every corner meets the second with room
+    /// for the per-point rounding of `t` and `r` (a few `1e-7 / |n . dir|` in all), and `t / r
+    /// < SHADOW_EPSILON (1 - 1e-4)` the first. Shadowed: `t / r` strictly between
+    /// `SHADOW_EPSILON` and `far`, each with a relative slack of `1e-4`. Either way the plane
+    /// is never seen edge-on (`|g| / r` above the `1e-6` below which the per-point test reads
+    /// the stored depth, with a factor 2: the smallest `|g|` over the largest `r`, `r` being
+    /// convex). A cut-out shadows nothing here: its holes are not in the map.
+    fn over_hull(&self, occ: &Plane, holes: bool, corners: &HullCorners, far: f64) -> Hull {
+        let d = occ.offset_from(self.map.light());
+        let (mut g_lo, mut g_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for v in &corners.v[..corners.n] {
+            let g = f64::from(occ.n.dot(*v));
+            g_lo = g_lo.min(g);
+            g_hi = g_hi.max(g);
+        }
+        let e = corners.e;
+        // `g` over the hull, widened: one sign, the smallest and the largest `|g|`.
+        let (near, far_g) = if g_lo - e > 0.0 {
+            (g_lo - e, g_hi + e)
+        } else if g_hi + e < 0.0 {
+            (g_hi + e, g_lo - e)
+        } else {
             return Hull::Unknown;
         };
-        let d = occ.offset_from(light);
-        let far = 1.0 - (2.0 * self.bias / res + TOLERANCE + 2.0 * e / h) as f64;
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for &p in corners {
-            let v = p - light;
-            let g = f64::from(occ.n.dot(v));
-            // The points' offsets from the hull move `g` by up to `e` (`|n| = 1`).
-            let g_near = g.abs() - f64::from(e);
-            if !(g_near > 0.0 && g_near > 2e-6 * f64::from(v.length() + e)) {
-                return Hull::Unknown;
-            }
-            for g in [g.signum() * g_near, g.signum() * (g.abs() + f64::from(e))] {
-                let ratio = d / g;
-                lo = lo.min(ratio);
-                hi = hi.max(ratio);
-            }
+        // (NaN-safe: a NaN bound declines.)
+        if near.abs().partial_cmp(&(2e-6 * corners.r_max)) != Some(std::cmp::Ordering::Greater) {
+            return Hull::Unknown;
         }
-        if lo > f64::from(SHADOW_EPSILON) * (1.0 + 1e-4) && hi < far * (1.0 - 1e-4) {
+        let (a, b) = (d / near, d / far_g);
+        let (lo, hi) = (a.min(b), a.max(b));
+        if lo >= 1.0 - 1e-7 || hi < f64::from(SHADOW_EPSILON) * (1.0 - 1e-4) {
+            Hull::Lit
+        } else if !holes && lo > f64::from(SHADOW_EPSILON) * (1.0 + 1e-4) && hi < far * (1.0 - 1e-4) {
             Hull::Shadowed
         } else {
             Hull::Unknown
@@ -691,6 +738,31 @@ impl Classifier<'_> {
     #[inline]
     fn has_holes(&self, id: u32) -> bool {
         self.cutouts.get(id as usize).is_some_and(|&c| c)
+    }
+}
+
+/// The corners of [`Classifier::hull`] as [`Classifier::over_hull`] reads them for every
+/// plane: their offsets from the light, the points' offset `e` from the hull, and the largest
+/// distance from the light (`r` is convex: largest at a corner), widened by `e`.
+struct HullCorners {
+    v: [Vec3; HULL_CORNERS],
+    n: usize,
+    e: f64,
+    r_max: f64,
+}
+
+/// The most corners [`Classifier::hull`] takes.
+pub const HULL_CORNERS: usize = 8;
+
+impl HullCorners {
+    /// `corners` (at most [`HULL_CORNERS`]) seen from `light`, of points up to `e` off their
+    /// hull.
+    fn new(corners: &[Vec3], light: Vec3, e: f32) -> Self {
+        let mut v = [Vec3::ZERO; HULL_CORNERS];
+        let n = corners.len().min(HULL_CORNERS);
+        v.iter_mut().zip(corners).for_each(|(v, &p)| *v = p - light);
+        let r_max = v[..n].iter().map(|v| f64::from(v.length())).fold(0.0, f64::max) + f64::from(e);
+        Self { v, n, e: f64::from(e), r_max }
     }
 }
 

@@ -1290,6 +1290,82 @@ impl LightMap {
         Some(if seen == UNSEEN { EMPTY } else { seen })
     }
 
+    /// Calls `seen` with the ids that the texels `[x0, x1] x [y0, y1]` of `face` at `level`
+    /// hold, every one at least once (some more than once), as [`LightMap::id_at`] gives
+    /// them ([`ABSENT`] for a page a paged map did not draw), until it returns `false`;
+    /// whether it never did. For the tile test where [`LightMap::region_id`] sees several
+    /// triangles: a block its summary says holds one triangle is seen once, a mixed block
+    /// texel by texel (runs of one id once).
+    #[allow(clippy::too_many_arguments)]
+    pub fn region_ids(
+        &self,
+        face: u8,
+        level: u8,
+        x0: u32,
+        y0: u32,
+        x1: u32,
+        y1: u32,
+        mut seen: impl FnMut(u32) -> bool,
+    ) -> bool {
+        let none = if self.paged { ABSENT } else { EMPTY };
+        let Some(f) = self.face_at(level, face) else {
+            return usize::from(face) >= self.layout.face_count() || seen(none);
+        };
+        if f.is_empty() && !self.paged {
+            return seen(EMPTY);
+        }
+        let last = self.resolution_at(level) - 1;
+        let (x1, y1) = (x1.min(last), y1.min(last));
+        let side = PAGE / REGION;
+        for by in y0 / REGION..=y1 / REGION {
+            for bx in x0 / REGION..=x1 / REGION {
+                let Some(slot) = f.slot(bx / side, by / side) else {
+                    if !seen(none) {
+                        return false;
+                    }
+                    continue;
+                };
+                let v = f.region[slot * PAGE_REGIONS + ((by % side) * side + bx % side) as usize];
+                if v != MIXED {
+                    if !seen(v) {
+                        return false;
+                    }
+                    continue;
+                }
+                let (tx0, tx1) = (x0.max(bx * REGION), x1.min(bx * REGION + REGION - 1));
+                let (ty0, ty1) = (y0.max(by * REGION), y1.min(by * REGION + REGION - 1));
+                // The block's rows within the box, each a run of texels of one page row.
+                let rows = (ty0..=ty1).map(|y| ((y % PAGE) * PAGE + tx0 % PAGE) as usize);
+                let width = (tx1 - tx0 + 1) as usize;
+                let mut run = UNSEEN;
+                let mut see = |id: u32| {
+                    if id == run {
+                        return true;
+                    }
+                    run = id;
+                    seen(id)
+                };
+                let all = match f.kept(slot) {
+                    Kept::One(id) => see(id),
+                    Kept::Palette { at, page, .. } => {
+                        let (index, palette) =
+                            (&f.index[page as usize * PAGE_TEXELS..], &f.palette[at as usize..]);
+                        rows.into_iter()
+                            .all(|t| index[t..t + width].iter().all(|&i| see(palette[usize::from(i)])))
+                    }
+                    Kept::Ids { page } => {
+                        let ids = &f.id[page as usize * PAGE_TEXELS..];
+                        rows.into_iter().all(|t| ids[t..t + width].iter().all(|&id| see(id)))
+                    }
+                };
+                if !all {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     /// Id of the closest triangle at texel `(ix, iy)` of `face` at level 0, or [`EMPTY`]
     /// ([`LightMap::id_at`]).
     #[inline]

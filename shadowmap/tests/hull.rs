@@ -186,3 +186,92 @@ fn hull_over_an_occluder_and_nothing_is_no_shadow() {
     }
     assert!(declined > 0 && asked > 0, "{declined} of {asked} declined");
 }
+
+/// A floor of many small triangles of one plane (in a map summarised by triangle, so no
+/// summary sees one triangle under a tile) under a crumpled roof of many small triangles of
+/// different planes: tiles away from the roof see several floor triangles and decide lit,
+/// tiles under it see several occluder planes and decide shadowed, and every decision is every
+/// point's, with no border.
+#[test]
+fn hull_decides_regions_of_several_planes() {
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    // A power of two: every cell the same to the bit, and so every plane.
+    let n = 32;
+    let height = |_: f32, _: f32| 0.0;
+    let at = |i: usize, j: usize| {
+        let (x, z) = (-1.0 + 2.0 * i as f32 / n as f32, -1.0 + 2.0 * j as f32 / n as f32);
+        Vec3::new(x, height(x, z), z)
+    };
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    // The floor triangle under `(x, z)`: cell `(i, j)`, the first of its pair where x - x_i >
+    // z - z_j.
+    let own = |p: Vec3| {
+        let (u, v) = ((p.x + 1.0) * n as f32 / 2.0, (p.z + 1.0) * n as f32 / 2.0);
+        let (i, j) = ((u as usize).min(n - 1), (v as usize).min(n - 1));
+        (2 * (j * n + i) + usize::from(u - i as f32 <= v - j as f32)) as u32
+    };
+    let floor = tris.len();
+    // The roof over x < 0: a grid of triangles at heights 0.9 to 1.1 above the floor.
+    let m = 8;
+    let roof: Vec<Vec<Vec3>> = (0..=m)
+        .map(|j| {
+            (0..=m)
+                .map(|i| {
+                    let (x, z) = (-0.9 + 0.8 * i as f32 / m as f32, -0.8 + 1.6 * j as f32 / m as f32);
+                    Vec3::new(x, height(x, z) + 0.9 + 0.2 * rng.f32(), z)
+                })
+                .collect()
+        })
+        .collect();
+    for j in 0..m {
+        for i in 0..m {
+            tris.push([roof[j][i], roof[j][i + 1], roof[j + 1][i + 1]]);
+            tris.push([roof[j][i], roof[j + 1][i + 1], roof[j + 1][i]]);
+        }
+    }
+    let light = Vec3::new(-0.3, 3.0, 0.1);
+    let planes = triangle_planes(&tris);
+    assert!(planes[..floor].iter().all(|p| *p == planes[0]), "the floor's triangles share a plane");
+    let (mut asked, mut lit, mut shadowed) = (0, 0, 0);
+    for res in [256, 1024] {
+        let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
+        let map = LightMap::build(&tris, light, &opts, &[true; 6]);
+        let cls = Classifier {
+            map: &map,
+            planes: &planes,
+            bias: 1.0,
+            point_error: point_error_bound(&tris),
+            cutouts: &[],
+        };
+        for _ in 0..400 {
+            // A tile's corners on the floor, spanning several of its triangles.
+            let (x, z) = (-0.95 + 1.8 * rng.f32(), -0.95 + 1.8 * rng.f32());
+            let d = 0.05 + 0.1 * rng.f32();
+            let corners = [(0.0, 0.0), (d, 0.0), (0.0, d), (d, d)]
+                .map(|(a, b)| Vec3::new(x + a, height(x + a, z + b), z + b));
+            asked += 1;
+            let hull = cls.hull(&corners, own(corners[0]), None, 0);
+            match hull {
+                Hull::Lit => lit += 1,
+                Hull::Shadowed => shadowed += 1,
+                Hull::Unknown => continue,
+            }
+            each_point(&corners, 12, |p| {
+                let lk = cls.classify(p, own(p));
+                assert!(
+                    (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
+                    "res {res}: {hull:?} but {p} is {lk:?}"
+                );
+            });
+        }
+    }
+    // Each tile spans several floor triangles (and, under the roof, several occluders), so
+    // without reading the triangles the summaries cannot name, every one would be declined.
+    assert!(lit * 3 > asked && shadowed * 3 > asked, "{lit} lit and {shadowed} shadowed of {asked}");
+}

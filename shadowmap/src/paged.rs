@@ -135,8 +135,22 @@ impl Resolution {
     /// the guide: several guides share them).
     #[inline]
     pub fn level_from(&self, receiver: f32, t: LightTerms) -> u8 {
-        let slant = t.cos_light.max(self.min_cos_light);
-        ceil_log2(t.r / slant * receiver).min(self.cap).min(MAX_LEVEL)
+        self.level_of_ratio(self.ratio(receiver, t))
+    }
+
+    /// What [`Resolution::level_from`] takes the logarithm of: `r / max(cos_l, MIN_COS_LIGHT)`
+    /// times the receiver's factor. The level never falls as it grows (NaN gives level 0), so
+    /// the finest level of several receivers is that of their largest ratio: one logarithm for
+    /// a tile of points.
+    #[inline]
+    pub fn ratio(&self, receiver: f32, t: LightTerms) -> f32 {
+        t.r / t.cos_light.max(self.min_cos_light) * receiver
+    }
+
+    /// The level of a [`Resolution::ratio`], capped.
+    #[inline]
+    pub fn level_of_ratio(&self, ratio: f32) -> u8 {
+        ceil_log2(ratio).min(self.cap).min(MAX_LEVEL)
     }
 }
 

@@ -78,8 +78,10 @@ impl Renderer<'_> {
         // The level of a point for light `l` (its receiver factor `recv`): its page level for
         // paged maps, 0 otherwise.
         let receiver = |s: &SurfaceHit| resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
-        let level =
-            |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0, |r| r.level_from(recv, t));
+        // Levels through their ratios (`Resolution::ratio`): a tile's finest level is that of
+        // its largest ratio.
+        let ratio = |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0.0, |r| r.ratio(recv, t));
+        let level = |l: usize, ratio: f32| resolution.get(l).map_or(0, |r| r.level_of_ratio(ratio));
 
         // No light with a map: nothing is decided here, and the occluders' planes and groups
         // (a pass over every triangle, the first time) are not needed at all.
@@ -121,9 +123,10 @@ impl Renderer<'_> {
             // slower once pages were compact: the page-table walk it repeats costs more than
             // the misses it hides.)
             let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
-            // Per point of the tile, its receiver factor and (per light in turn) its level.
+            // Per point of the tile, its receiver factor and (per light in turn) its level's
+            // ratio.
             let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
-            let mut levels: Vec<u8> = Vec::with_capacity(TILE * TILE);
+            let mut ratios: Vec<f32> = Vec::with_capacity(TILE * TILE);
             let mut located = Vec::with_capacity(TILE * TILE);
             // Per point of the tile and light, `light_geometry`.
             let mut geo: Vec<Option<(Vec3, f32, f32)>> = Vec::with_capacity(TILE * TILE * nl);
@@ -195,8 +198,8 @@ impl Renderer<'_> {
                         continue;
                     }
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
-                    levels.clear();
-                    levels.extend(recv.iter().enumerate().map(|(k, &f)| level(l, f, terms[k * nl + l])));
+                    ratios.clear();
+                    ratios.extend(recv.iter().enumerate().map(|(k, &f)| ratio(l, f, terms[k * nl + l])));
                     // The tile test reads one level: the finest its points need (each point then
                     // gets texels at least as fine as its own level's; where that level's pages
                     // do not cover the tile, the test cannot tell).
@@ -218,9 +221,9 @@ impl Renderer<'_> {
                             }
                         }
                     };
-                    let hull = corners
-                        .as_ref()
-                        .map_or(Hull::Unknown, |k| hull_of(k, 0, levels.iter().copied().max().unwrap_or(0)));
+                    let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
+                        hull_of(k, 0, level(l, ratios.iter().copied().fold(0.0, f32::max)))
+                    });
                     if hull != Hull::Unknown {
                         decide_all(hull, &mut (0..tile.len()), lit, &mut counts[l]);
                         continue;
@@ -229,7 +232,7 @@ impl Renderer<'_> {
                     let mut undecided = u64::MAX;
                     for (q, k) in quarters.iter().enumerate() {
                         let Some(k) = k else { continue };
-                        let finest = (0..H * H).map(|i| levels[quarter(q, i)]).max().unwrap_or(0);
+                        let finest = level(l, (0..H * H).map(|i| ratios[quarter(q, i)]).fold(0.0, f32::max));
                         let hull = hull_of(k, quarter(q, 0), finest);
                         if hull != Hull::Unknown {
                             decide_all(hull, &mut (0..H * H).map(|i| quarter(q, i)), lit, &mut counts[l]);
@@ -240,7 +243,7 @@ impl Renderer<'_> {
                     located.clear();
                     for (k, (j, s)) in tile.iter().enumerate() {
                         if faces[j * stride + byte] & bit != 0 && undecided >> k & 1 != 0 {
-                            located.push((k, c.locate_at(s.p, levels[k])));
+                            located.push((k, c.locate_at(s.p, level(l, ratios[k]))));
                         }
                     }
                     for &(k, m) in &located {

@@ -9,11 +9,12 @@ use hyrt_shadowmap::{
 use hyrt_tracer::Hit;
 use rayon::prelude::*;
 
+use super::lanes::{FromLight, LANES, TileLanes};
 use super::lookup::{classifiers, settle};
 use super::map_cache::FrameMaps;
 use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, bit, sum_per_light};
 use crate::render::gather::ShadePoint;
-use crate::render::light::{PlaneSides, light_geometry_and_terms, on_viewer_side, reflect, seen_winding};
+use crate::render::light::{PlaneSides, on_viewer_side, reflect, seen_winding};
 use crate::render::{FrameStats, Progress, Renderer, SurfaceHit};
 
 /// One band of rows of classify's outputs: the direct light, and the face, lit and edge bits.
@@ -38,8 +39,8 @@ const TILE: usize = 8;
 /// Half a [`TILE`]: the side of the quarters whose points the tile test decides at once when the
 /// whole tile's cannot.
 const H: usize = TILE / 2;
-// A tile's points are bits of a `u64` in the classify pass.
-const _: () = assert!(TILE * TILE <= 64);
+// A tile's points are bits of a `u64` in the classify pass, and lanes of `TileLanes`.
+const _: () = assert!(TILE * TILE <= 64 && TILE * TILE <= LANES);
 
 impl Renderer<'_> {
     /// The map-build pass: the light maps the camera hits of `gbuffer` need, from the cache or
@@ -123,21 +124,24 @@ impl Renderer<'_> {
             // slower once pages were compact: the page-table walk it repeats costs more than
             // the misses it hides.)
             let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
-            // Per point of the tile, its receiver factor and (per light in turn) its level's
-            // ratio.
+            // The same points a lane each, and one light seen from them (`lanes`).
+            let mut lanes = TileLanes::new();
+            let mut from = FromLight::new();
+            // Per point of the tile, its receiver factor; per light and point (`l * LANES + k`),
+            // its level's ratio.
             let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
-            let mut ratios: Vec<f32> = Vec::with_capacity(TILE * TILE);
+            let mut ratios: Vec<f32> = vec![0.0; LANES * nl];
             let mut located = Vec::with_capacity(TILE * TILE);
-            // Per point of the tile and light, `light_geometry`.
+            // Per point of the tile and light, `light_geometry`, and whether the light is on
+            // the side of the point's plane it is seen from.
             let mut geo: Vec<Option<(Vec3, f32, f32)>> = Vec::with_capacity(TILE * TILE * nl);
-            // Per point of the tile and light, its level's `LightTerms`.
-            let mut terms: Vec<LightTerms> = Vec::with_capacity(TILE * TILE * nl);
+            let mut side: Vec<bool> = Vec::with_capacity(TILE * TILE * nl);
             let mut sides = PlaneSides::new();
             for x0 in (0..w).step_by(TILE) {
                 tile.clear();
+                lanes.clear();
                 recv.clear();
-                geo.clear();
-                terms.clear();
+                side.clear();
                 let x1 = (x0 + TILE).min(w);
                 for y in 0..rows {
                     for j in y * w + x0..y * w + x1 {
@@ -150,27 +154,39 @@ impl Renderer<'_> {
                         }
                         let tri = &self.scene.positions[s.tri as usize];
                         let sd = sides.of(s.tri, tri, lights);
-                        let bits = &mut faces[j * stride..][..stride];
-                        // `facing`, with the plane sides and the winding reused; the light's
-                        // geometry kept for the shading below.
+                        // `facing`'s side test, with the plane sides and the winding reused.
                         let seen = seen_winding(&s, tri);
-                        for (l, light) in lights.iter().enumerate() {
-                            // A light without a map: the ray pass decides and shades it. With no
-                            // `faces` bit it has no border either (borders are within `faces`).
-                            if by_rays[l] {
-                                terms.push(LightTerms { r: 0.0, cos_light: 0.0 });
-                                geo.push(None);
-                                continue;
-                            }
-                            let (g, t) = light_geometry_and_terms(&s, light);
-                            terms.push(t);
-                            if g.is_some() && on_viewer_side(seen, sd[l]) {
-                                bits[l / 8] |= 1 << (l % 8);
-                            }
-                            geo.push(g);
-                        }
+                        side.extend(sd.iter().map(|&d| on_viewer_side(seen, d)));
                         recv.push(receiver(&s));
+                        lanes.push(&s);
                         tile.push((j, s));
+                    }
+                }
+                // Per light, every point's geometry (kept for the shading below), its `faces`
+                // bit and its level's ratio. A light without a map: the ray pass decides and
+                // shades it. With no `faces` bit it has no border either (borders are within
+                // `faces`).
+                geo.clear();
+                geo.resize(tile.len() * nl, None);
+                for (l, light) in lights.iter().enumerate() {
+                    if by_rays[l] {
+                        continue;
+                    }
+                    lanes.seen_from(light.position, &mut from);
+                    let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    let bright = light.intensity.max_element() > 0.0;
+                    for (k, (j, _)) in tile.iter().enumerate() {
+                        // `light_geometry_and_terms`'s conditions, on its arithmetic (`lanes`).
+                        let wi = from.wi(k);
+                        let g =
+                            (bright && from.d2[k] != 0.0 && !light.dark_towards(-wi) && from.cos[k] > 0.0)
+                                .then_some((wi, from.cos[k], from.d2[k]));
+                        if g.is_some() && side[k * nl + l] {
+                            faces[j * stride + byte] |= bit;
+                        }
+                        geo[k * nl + l] = g;
+                        ratios[l * LANES + k] =
+                            ratio(l, recv[k], LightTerms { r: from.r[k], cos_light: from.cos_light[k] });
                     }
                 }
                 // A tile wholly on one plane (triangles of one group): its corner points may
@@ -198,8 +214,7 @@ impl Renderer<'_> {
                         continue;
                     }
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
-                    ratios.clear();
-                    ratios.extend(recv.iter().enumerate().map(|(k, &f)| ratio(l, f, terms[k * nl + l])));
+                    let ratios = &ratios[l * LANES..][..tile.len()];
                     // The tile test reads one level: the finest its points need (each point then
                     // gets texels at least as fine as its own level's; where that level's pages
                     // do not cover the tile, the test cannot tell).

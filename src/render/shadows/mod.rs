@@ -38,6 +38,7 @@
 mod border_rays;
 mod borders;
 mod classify;
+mod lanes;
 mod light_rays;
 mod lookup;
 mod map_cache;

@@ -6,7 +6,7 @@ use glam::Vec3;
 use hyrt_shadowmap::{
     LightMap, MapKind, MapOptions,
     classify::Decision,
-    classify::{Classifier, Hull, plane_groups, point_error_bound, triangle_planes},
+    classify::{Classifier, Hull, Plane, plane_groups, point_error_bound, triangle_planes},
 };
 
 use hyrt_testkit::Rng;
@@ -51,6 +51,31 @@ fn each_point(corners: &[Vec3; 4], n: usize, mut f: impl FnMut(Vec3)) {
     }
 }
 
+/// The classifier the tests use: bias 1, the points' rounding bound of `tris`.
+fn classifier<'a>(map: &'a LightMap, planes: &'a [Plane], tris: &[[Vec3; 3]]) -> Classifier<'a> {
+    Classifier { map, planes, bias: 1.0, point_error: point_error_bound(tris), cutouts: &[] }
+}
+
+/// Asserts that every point of a grid over the patch of `corners` (`n` steps a side; `own`
+/// its triangle) is decided as the tile test decided them (`hull`, not `Unknown`), with no
+/// border.
+fn every_point_agrees(
+    cls: &Classifier,
+    corners: &[Vec3; 4],
+    n: usize,
+    own: impl Fn(Vec3) -> u32,
+    hull: Hull,
+    what: &str,
+) {
+    each_point(corners, n, |p| {
+        let lk = cls.classify(p, own(p));
+        assert!(
+            (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
+            "{what}: {hull:?} but {p} is {lk:?}"
+        );
+    });
+}
+
 #[test]
 fn hull_decisions_are_every_points_decision_without_border() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
@@ -70,13 +95,7 @@ fn hull_decisions_are_every_points_decision_without_border() {
             assert_eq!(groups[1] == groups[0], grouped, "the floor's triangles share their plane");
             let map =
                 LightMap::build_grouped(&tris, light, &opts, &[true; 6], if grouped { &groups } else { &[] });
-            let cls = Classifier {
-                map: &map,
-                planes: &planes,
-                bias: 1.0,
-                point_error: point_error_bound(&tris),
-                cutouts: &[],
-            };
+            let cls = classifier(&map, &planes, &tris);
             for _ in 0..400 {
                 // A small convex quad on the floor (a tile's corners: a perspective image of a
                 // square, here a random convex quad): on triangle 0 (x > z side), or with
@@ -101,13 +120,7 @@ fn hull_decisions_are_every_points_decision_without_border() {
                     Hull::Unknown => continue,
                 }
                 straddling += usize::from(corners.iter().any(|&p| own(p) != own(corners[0])));
-                each_point(&corners, 16, |p| {
-                    let lk = cls.classify(p, own(p));
-                    assert!(
-                        (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
-                        "res {res}, centre {centre}: {hull:?} but {p} is {lk:?}"
-                    );
-                });
+                every_point_agrees(&cls, &corners, 16, own, hull, &format!("res {res}, centre {centre}"));
             }
         }
     }
@@ -156,13 +169,7 @@ fn hull_over_an_occluder_and_nothing_is_no_shadow() {
     for res in [64, 256, 1024] {
         let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
         let map = LightMap::build(&tris, light, &opts, &[true; 6]);
-        let cls = Classifier {
-            map: &map,
-            planes: &planes,
-            bias: 1.0,
-            point_error: point_error_bound(&tris),
-            cutouts: &[],
-        };
+        let cls = classifier(&map, &planes, &tris);
         // Tiles along the floor's x = 1 edge (on triangle 0, where x > z), a few texels wide.
         for k in 0..200 {
             let z = -0.9 + 1.0 * k as f32 / 200.0;
@@ -175,13 +182,7 @@ fn hull_over_an_occluder_and_nothing_is_no_shadow() {
                 declined += 1;
                 continue;
             }
-            each_point(&corners, 8, |p| {
-                let lk = cls.classify(p, 0);
-                assert!(
-                    (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
-                    "res {res}: {hull:?} but {p} is {lk:?}"
-                );
-            });
+            every_point_agrees(&cls, &corners, 8, |_| 0, hull, &format!("res {res}"));
         }
     }
     assert!(declined > 0 && asked > 0, "{declined} of {asked} declined");
@@ -242,13 +243,7 @@ fn hull_decides_regions_of_several_planes() {
     for res in [256, 1024] {
         let opts = MapOptions { kind: MapKind::Cube, resolution: res, ..MapOptions::default() };
         let map = LightMap::build(&tris, light, &opts, &[true; 6]);
-        let cls = Classifier {
-            map: &map,
-            planes: &planes,
-            bias: 1.0,
-            point_error: point_error_bound(&tris),
-            cutouts: &[],
-        };
+        let cls = classifier(&map, &planes, &tris);
         for _ in 0..400 {
             // A tile's corners on the floor, spanning several of its triangles.
             let (x, z) = (-0.95 + 1.8 * rng.f32(), -0.95 + 1.8 * rng.f32());
@@ -262,13 +257,7 @@ fn hull_decides_regions_of_several_planes() {
                 Hull::Shadowed => shadowed += 1,
                 Hull::Unknown => continue,
             }
-            each_point(&corners, 12, |p| {
-                let lk = cls.classify(p, own(p));
-                assert!(
-                    (lk.decision == Decision::Lit) == (hull == Hull::Lit) && !lk.map_border,
-                    "res {res}: {hull:?} but {p} is {lk:?}"
-                );
-            });
+            every_point_agrees(&cls, &corners, 12, own, hull, &format!("res {res}"));
         }
     }
     // Each tile spans several floor triangles (and, under the roof, several occluders), so

@@ -327,12 +327,12 @@ impl Classifier<'_> {
     ///   map made by [`LightMap::build_grouped`](crate::LightMap::build_grouped), or any
     ///   triangle whose [`Plane`] is `own`'s to the bit): every footprint decides lit, as the
     ///   per-point test calls a triangle of the point's very plane lit;
-    /// - other triangles: each texel of every footprint decides by its triangle's plane, and
-    ///   [`Classifier::over_hull`] finds when a plane decides the same for every point of the
-    ///   hull (lit, or shadowed with no bias band). When every triangle seen decides lit, or
-    ///   every one shadowed, so does every footprint, with no border. The summaries say which
-    ///   triangles the box sees where one triangle (or one group of a plane) fills it;
-    ///   otherwise its texels are read ([`LightMap::region_ids`]).
+    /// - other triangles: each texel of every footprint decides by its triangle's plane, and a
+    ///   test of the plane at the corners (`over_hull`) finds when it decides the same for
+    ///   every point of the hull (lit, or shadowed with no bias band). When every triangle
+    ///   seen decides lit, or every one shadowed, so does every footprint, with no border. The
+    ///   summaries say which triangles the box sees where one triangle (or one group of a
+    ///   plane) fills it; otherwise its texels are read ([`LightMap::region_ids`]).
     ///
     /// At most [`HULL_CORNERS`] corners (more: [`Hull::Unknown`]).
     /// The corners are located at level `level` (0 for whole maps), and the region read there.

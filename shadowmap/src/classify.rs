@@ -401,7 +401,7 @@ impl Classifier<'_> {
         // Several planes: every triangle seen must decide the same for every point. Runs of
         // texels repeat ids: the last few verdicts are kept.
         let (mut lit, mut shadowed) = (false, false);
-        let mut known = [(EMPTY, Hull::Lit); 4];
+        let mut known = [(EMPTY, Hull::Lit); 8];
         let mut next = 0;
         let agreed = map.region_ids(c0.face, level, x0, y0, x1, y1, |id| {
             let verdict = match known.iter().find(|k| k.0 == id) {

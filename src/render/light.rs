@@ -105,21 +105,27 @@ pub(crate) fn light_geometry_and_terms(
     // `length()` is `length_squared().sqrt()`: the terms are `LightTerms::of`'s.
     let r = d2.sqrt();
     let terms = LightTerms::of_offset(hit.ng, to_light, r);
-    if d2 == 0.0 {
+    if is_dark(light) || d2 == 0.0 {
         return (None, terms);
     }
     let wi = to_light / r;
     (lights_along(light, wi, hit.ns.dot(wi), d2), terms)
 }
 
-/// [`light_geometry`] from its parts: `Some((wi, cos, d2))` when `light` sends something
-/// along `-wi` (the unit direction to it, at squared distance `d2 > 0`) and `cos`, the shading
-/// normal's cosine with `wi`, is positive. A dark light adds nothing: no ray, no map (the plan
-/// says so); nor does a spot light outside its cone.
+/// Whether `light` sends nothing at all: a dark light adds nothing, no ray, no map (the plan
+/// says so).
+#[inline]
+pub(crate) fn is_dark(light: &PointLight) -> bool {
+    light.intensity.max_element() <= 0.0
+}
+
+/// [`light_geometry`] from its parts, for a light that is not [dark](is_dark):
+/// `Some((wi, cos, d2))` when it sends something along `-wi` (the unit direction to it, at
+/// squared distance `d2 > 0`; not so outside a spot light's cone) and `cos`, the shading
+/// normal's cosine with `wi`, is positive.
 #[inline]
 pub(crate) fn lights_along(light: &PointLight, wi: Vec3, cos: f32, d2: f32) -> Option<(Vec3, f32, f32)> {
-    let dark = light.intensity.max_element() <= 0.0;
-    (!dark && !light.dark_towards(-wi) && cos > 0.0).then_some((wi, cos, d2))
+    (!light.dark_towards(-wi) && cos > 0.0).then_some((wi, cos, d2))
 }
 
 /// The sum of [`shade`](super::direct::shade) over the lights for which `lit(l, light)` gives their geometry

@@ -14,7 +14,7 @@ use super::lookup::{classifiers, settle};
 use super::map_cache::FrameMaps;
 use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, bit, sum_per_light};
 use crate::render::gather::ShadePoint;
-use crate::render::light::{PlaneSides, lights_along, on_viewer_side, reflect, seen_winding};
+use crate::render::light::{PlaneSides, is_dark, lights_along, on_viewer_side, reflect, seen_winding};
 use crate::render::{FrameStats, Progress, Renderer, SurfaceHit};
 
 /// One band of rows of classify's outputs: the direct light, and the face, lit and edge bits.
@@ -174,11 +174,14 @@ impl Renderer<'_> {
                     }
                     lanes.seen_from(light.position, &mut from);
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    let dark = is_dark(light);
                     for (k, (j, _)) in tile.iter().enumerate() {
                         // `light_geometry_and_terms`, on its arithmetic done a lane a point.
-                        let g = (from.d2[k] != 0.0)
-                            .then(|| lights_along(light, from.wi(k), from.cos[k], from.d2[k]))
-                            .flatten();
+                        let g = if dark || from.d2[k] == 0.0 {
+                            None
+                        } else {
+                            lights_along(light, from.wi(k), from.cos[k], from.d2[k])
+                        };
                         if g.is_some() && side[k * nl + l] {
                             faces[j * stride + byte] |= bit;
                         }

@@ -307,9 +307,10 @@ impl Classifier<'_> {
     }
 
     /// What [`Classifier::classify`] decides for every point in the convex hull of `corners`
-    /// (points of `own`'s plane) that lies on `own` or on another triangle of `own`'s `group`
-    /// (see below), found from the map region under the corners alone: [`Hull::Lit`] or [`Hull::Shadowed`] (each with no border), or [`Hull::Unknown`]
-    /// when it cannot tell (then classify the points one by one).
+    /// (points of `own`'s plane) that lies on `own` or on another triangle of `own`'s very
+    /// [`Plane`] (see below), found from the map region under the corners alone: [`Hull::Lit`]
+    /// or [`Hull::Shadowed`] (each with no border), or [`Hull::Unknown`] when it cannot tell
+    /// (then classify the points one by one).
     ///
     /// Why it holds: the directions from the light that a cube face covers form a convex cone,
     /// so if every corner falls on one face, so does their hull; and within a face the map is a
@@ -323,10 +324,10 @@ impl Classifier<'_> {
     /// are `res / 2` texels per unit), plus one texel for the coordinates' own rounding. That
     /// box must stay inside the face ([`LightMap::region_id`] then says what it sees):
     ///
-    /// - nothing, or only `own`, or only triangles of `own`'s plane (its group `Some(g)`, in a
-    ///   map made by [`LightMap::build_grouped`](crate::LightMap::build_grouped), or any
-    ///   triangle whose [`Plane`] is `own`'s to the bit): every footprint decides lit, as the
-    ///   per-point test calls a triangle of the point's very plane lit;
+    /// - nothing, or only `own`, or only triangles whose [`Plane`] is `own`'s to the bit (its
+    ///   group, in a map made by [`LightMap::build_grouped`](crate::LightMap::build_grouped)):
+    ///   every footprint decides lit, as the per-point test calls a triangle of the point's
+    ///   very plane lit;
     /// - other triangles: each texel of every footprint decides by its triangle's plane, and a
     ///   test of the plane at the corners (`over_hull`) finds when it decides the same for
     ///   every point of the hull (lit, or shadowed with no bias band). When every triangle
@@ -337,7 +338,7 @@ impl Classifier<'_> {
     /// At most [`HULL_CORNERS`] corners (more: [`Hull::Unknown`]).
     /// The corners are located at level `level` (0 for whole maps), and the region read there.
     /// Paraboloid maps are not central projections: always [`Hull::Unknown`].
-    pub fn hull(&self, corners: &[Vec3], own: u32, group: Option<u32>, level: u8) -> Hull {
+    pub fn hull(&self, corners: &[Vec3], own: u32, level: u8) -> Hull {
         let map = self.map;
         let Some(first) = corners.first().filter(|_| corners.len() <= HULL_CORNERS) else {
             return Hull::Unknown;
@@ -392,11 +393,11 @@ impl Classifier<'_> {
             Some(id) => return judge(id),
             // Several triangles: perhaps all of one plane (own's, or an occluder's), whose
             // group's first triangle has their plane, and their holes (`plane_groups`).
-            None => match map.region_group(c0.face, level, x0, y0, x1, y1) {
-                Some(g) if Some(g) == group => return Hull::Lit,
-                Some(g) => return judge(g),
-                None => {}
-            },
+            None => {
+                if let Some(g) = map.region_group(c0.face, level, x0, y0, x1, y1) {
+                    return judge(g);
+                }
+            }
         }
         // Several planes: every triangle seen must decide the same for every point. Runs of
         // texels repeat ids: the last few verdicts are kept.

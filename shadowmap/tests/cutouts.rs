@@ -50,8 +50,8 @@ fn points_under_a_cut_out_are_borders_for_a_ray() {
     assert_eq!(cut.classify(beside, 0).decision, Decision::Lit);
     // The tile shortcut: shadowed under the solid lid, undecided under the cut-out.
     let tile = [under, under + Vec3::X * 0.01, under + Vec3::Z * 0.01, under + Vec3::new(0.01, 0.0, 0.01)];
-    assert_eq!(solid.hull(&tile, 0, None, 0), Hull::Shadowed);
-    assert_eq!(cut.hull(&tile, 0, None, 0), Hull::Unknown);
+    assert_eq!(solid.hull(&tile, 0, 0), Hull::Shadowed);
+    assert_eq!(cut.hull(&tile, 0, 0), Hull::Unknown);
     // Plane groups never mix triangles with and without holes (the lid's two triangles are
     // coplanar: one group with or without holes, but apart from a solid twin).
     let mut twin = tris.clone();

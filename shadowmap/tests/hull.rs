@@ -112,8 +112,7 @@ fn hull_decisions_are_every_points_decision_without_border() {
                     continue;
                 }
                 asked += 1;
-                let hull =
-                    cls.hull(&corners, own(corners[0]), grouped.then(|| groups[own(corners[0]) as usize]), 0);
+                let hull = cls.hull(&corners, own(corners[0]), 0);
                 match hull {
                     Hull::Lit => lit += 1,
                     Hull::Shadowed => shadowed += 1,
@@ -140,8 +139,8 @@ fn hull_declines_paraboloids_and_empty_input() {
     let map = LightMap::build(&tris, Vec3::Y, &opts, &[true; 2]);
     let planes = triangle_planes(&tris);
     let cls = Classifier { map: &map, planes: &planes, bias: 1.0, point_error: 0.0, cutouts: &[] };
-    assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0, None, 0), Hull::Unknown);
-    assert_eq!(cls.hull(&[], 0, None, 0), Hull::Unknown);
+    assert_eq!(cls.hull(&[Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0)], 0, 0), Hull::Unknown);
+    assert_eq!(cls.hull(&[], 0, 0), Hull::Unknown);
 }
 
 /// An occluder that hides a floor exactly, as the light sees it (the floor scaled towards the
@@ -177,7 +176,7 @@ fn hull_over_an_occluder_and_nothing_is_no_shadow() {
             let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
                 .map(|(a, b)| Vec3::new(1.0 - d * (1.0 - a) - 1e-4, 0.0, z + d * b * 0.5));
             asked += 1;
-            let hull = cls.hull(&corners, 0, None, 0);
+            let hull = cls.hull(&corners, 0, 0);
             if hull == Hull::Unknown {
                 declined += 1;
                 continue;
@@ -251,7 +250,7 @@ fn hull_decides_regions_of_several_planes() {
             let corners = [(0.0, 0.0), (d, 0.0), (0.0, d), (d, d)]
                 .map(|(a, b)| Vec3::new(x + a, height(x + a, z + b), z + b));
             asked += 1;
-            let hull = cls.hull(&corners, own(corners[0]), None, 0);
+            let hull = cls.hull(&corners, own(corners[0]), 0);
             match hull {
                 Hull::Lit => lit += 1,
                 Hull::Shadowed => shadowed += 1,

@@ -121,7 +121,7 @@ pub struct Renderer<'a> {
     /// Per triangle, its group of coplanar triangles ([`hyrt_shadowmap::classify::plane_groups`]):
     /// the light maps summarise their regions by group, and classification decides a tile on
     /// one plane at once. Made on first use.
-    plane_groups: std::sync::OnceLock<(Vec<u32>, Vec<bool>)>,
+    plane_groups: std::sync::OnceLock<Vec<u32>>,
     /// [`Renderer::cutouts`].
     cutouts: Vec<bool>,
 }
@@ -190,19 +190,10 @@ impl<'a> Renderer<'a> {
         (planes, *e)
     }
 
-    /// Per triangle, its group of coplanar triangles, and whether the group has other
-    /// triangles (see [`Renderer::occluders`]).
-    pub fn plane_groups(&self) -> (&[u32], &[bool]) {
-        let (groups, shared) = self.plane_groups.get_or_init(|| {
-            let groups = hyrt_shadowmap::classify::plane_groups(self.occluders().0, self.cutouts());
-            let mut size = vec![0u32; groups.len()];
-            for &g in &groups {
-                size[g as usize] += 1;
-            }
-            let shared = groups.iter().map(|&g| size[g as usize] > 1).collect();
-            (groups, shared)
-        });
-        (groups, shared)
+    /// Per triangle, its group of coplanar triangles (see [`Renderer::occluders`]).
+    pub fn plane_groups(&self) -> &[u32] {
+        self.plane_groups
+            .get_or_init(|| hyrt_shadowmap::classify::plane_groups(self.occluders().0, self.cutouts()))
     }
 
     /// Changes the strategies and knobs of the next frames, keeping every cache the change

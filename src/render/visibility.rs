@@ -73,7 +73,7 @@ pub(crate) fn run(
                     let rays = row_rays(&r.camera, y);
                     // Asked only for pixels with a rival (the groups are made on first use).
                     let same_plane = |a: u32, b: u32| {
-                        let groups = r.plane_groups().0;
+                        let groups = r.plane_groups();
                         groups.get(a as usize) == groups.get(b as usize)
                     };
                     for (x, ((px, &id), &rival)) in row.iter_mut().zip(ids).zip(rivals).enumerate() {

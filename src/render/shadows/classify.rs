@@ -89,7 +89,7 @@ impl Renderer<'_> {
         let no_map = !by_rays.is_empty() && by_rays.iter().all(|&b| b);
         let planes: &'r [Plane] = if no_map { &[] } else { self.occluders().0 };
         let cls = if no_map { Vec::new() } else { classifiers(&maps, planes, self) };
-        let (groups, shared) = if no_map { (&[][..], &[][..]) } else { self.plane_groups() };
+        let groups = if no_map { &[][..] } else { self.plane_groups() };
         bufs.faces.reset(n, nl);
         bufs.lit.reset(n, nl);
         bufs.edge.reset(n, nl);
@@ -219,10 +219,8 @@ impl Renderer<'_> {
                     // The tile test reads one level: the finest its points need (each point then
                     // gets texels at least as fine as its own level's; where that level's pages
                     // do not cover the tile, the test cannot tell).
-                    let hull_of = |k: &[Vec3; 4], first: usize, finest: u8| {
-                        let own = tile[first].1.tri;
-                        c.hull(k, own, shared[own as usize].then(|| group(&tile[first].1)), finest)
-                    };
+                    let hull_of =
+                        |k: &[Vec3; 4], first: usize, finest: u8| c.hull(k, tile[first].1.tri, finest);
                     let decide_all = |hull: Hull,
                                       points: &mut dyn Iterator<Item = usize>,
                                       lit: &mut [u8],

@@ -233,7 +233,7 @@ impl Renderer<'_> {
                         light.position,
                         &self.options.shadow.map,
                         &faces,
-                        self.plane_groups().0,
+                        self.plane_groups(),
                     );
                     match &mut cache[l] {
                         Some(old) => Arc::make_mut(old).merge(map),
@@ -254,7 +254,7 @@ impl Renderer<'_> {
         }
         // The lights' pages drawn concurrently: each build has serial steps (binning's sort,
         // the page tables) that another light's drawing fills.
-        let groups = if jobs.is_empty() { &[][..] } else { self.plane_groups().0 };
+        let groups = if jobs.is_empty() { &[][..] } else { self.plane_groups() };
         // As many at a time as there are threads: each holds its bins until drawn, and more in
         // flight add to the peak memory, not to the speed.
         let drawn: Vec<(LightMap, f64)> = jobs

@@ -84,7 +84,7 @@ impl Shadowing<'_> {
                 continue;
             }
             let keys: Vec<PageKey> = keys.into_iter().map(PageKey::unpack).collect();
-            let groups = *groups.get_or_insert_with(|| r.plane_groups().0);
+            let groups = *groups.get_or_insert_with(|| r.plane_groups());
             let drawn = r.draw_pages(l, &keys, groups);
             // The cache's copy let go first, so that the merge does not copy the whole map.
             let mut cache = r.maps.maps.lock().unwrap_or_else(|e| e.into_inner());

@@ -3,7 +3,7 @@
 //! turns into vector instructions.
 //!
 //! Why: per pair this is a square root, four divisions and three dot products, the same for
-//! every point; done point by point inside the loop over lights it ran one pair at a time. The
+//! every point; computed inside the loop over a tile's points, it ran one pair at a time. The
 //! arithmetic is [`light_geometry_and_terms`](crate::render::light::light_geometry_and_terms)'s,
 //! operation for operation (IEEE division and square root are exact in every lane, and Rust
 //! never fuses a multiply and an add), so its results are the same bits.

@@ -92,12 +92,16 @@ impl Shadowing<'_> {
             .collect();
         let mut total = RayCounts::default();
         let und_counts = &mut self.und_counts;
+        // The pixels for which a ray overturned the map's decision of some light.
+        let mut overturned = vec![false; pixels.len()];
         for (chunk, (out, c)) in order.chunks(RAY_CHUNK).zip(answers) {
             for (&(l, k), (blocked, hinted)) in chunk.iter().zip(out) {
                 let (l, i) = (l as usize, pixels[k as usize] as usize);
                 let (byte, m) = (i * stride + l / 8, 1u8 << (l % 8));
+                let map_lit = b.lit.bits[byte] & m != 0;
                 und_counts[l].rays += 1;
-                und_counts[l].map_lit += u64::from(b.lit.bits[byte] & m != 0);
+                und_counts[l].map_lit += u64::from(map_lit);
+                overturned[k as usize] |= map_lit == blocked;
                 if blocked {
                     b.lit.bits[byte] &= !m;
                 } else {
@@ -109,17 +113,22 @@ impl Shadowing<'_> {
             }
             total += c;
         }
-        // The direct light of the pixels with rays, again, with their final decisions.
+        // The direct light of the pixels whose decisions a ray overturned, again, with their
+        // final decisions. The others' is classify's, from the same decisions: `reflect` of
+        // the same geometry (`lanes` is `light_geometry` to the bit), or nothing for a pixel
+        // whose camera hit came after classify and whose rays all found shadow.
         let lit = &b.lit;
-        let colors: Vec<Vec3> = pixels
+        let colors: Vec<(u32, Vec3)> = pixels
             .par_iter()
             .zip(&points)
-            .map(|(&i, s)| {
+            .zip(&overturned)
+            .filter(|(_, o)| **o)
+            .map(|((&i, s), _)| {
                 let bits = lit.pixel(i as usize);
-                reflect(r, s, |l, light| if bit(bits, l) { light_geometry(s, light) } else { None })
+                (i, reflect(r, s, |l, light| if bit(bits, l) { light_geometry(s, light) } else { None }))
             })
             .collect();
-        for (&i, c) in pixels.iter().zip(colors) {
+        for (i, c) in colors {
             direct[i as usize] = c;
         }
         total

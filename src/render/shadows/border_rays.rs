@@ -7,129 +7,113 @@ use hyrt_tracer::{Hit, RayCounts, RayKind, spawn_ray_to};
 use rayon::prelude::*;
 
 use super::lookup::{classifiers, hint, lookup};
-use super::{BorderRay, LightBits, Shadowing, WrongCounts, bit, per_light, sum_per_light};
+use super::{BorderRay, LightBits, RayCounted, Shadowing, WrongCounts, bit, per_light, sum_per_light};
 use crate::render::light::{light_geometry, reflect};
 use crate::render::{Renderer, Shadows, SurfaceHit};
 
-/// Rays per parallel chunk of the shadow-ray pass: fixed, so that ray counts add up in the same
-/// order for any thread count.
-const RAY_CHUNK: usize = 64;
+/// Rows of the image per parallel task of the shadow-ray pass. Each band's rays are found,
+/// traced, applied and shaded by its task, so that the pass has no serial part; a band's rays to
+/// one light still go out in screen order, from neighbouring points.
+const BAND_ROWS: usize = 2;
 
 impl Shadowing<'_> {
     /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
-    /// answer replaces the map's; the direct light of the pixels with such rays is computed
-    /// again into `direct`.
+    /// answer replaces the map's; the direct light of the pixels whose decision a ray
+    /// overturned is computed again into `direct`.
+    ///
+    /// One task per band of [`BAND_ROWS`] rows: its pixels with rays and their shading points,
+    /// then light by light, each light's rays in screen order (rays to one light from nearby
+    /// points traverse the same nodes one after the other; the pixel-major order alternates
+    /// lights, and a Morton order of the pixels measured slower than rows), then the shading.
     pub fn trace(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], direct: &mut [Vec3]) -> RayCounts {
-        let n = gbuffer.len();
         let nl = self.maps.len();
+        let w = r.scene.settings.width.max(1) as usize;
         let b = &mut self.bufs;
         let stride = b.faces.stride;
-        // The pixels with rays, in order, and their shading points.
-        let w = r.scene.settings.width.max(1) as usize;
-        let pixels: Vec<u32> = (0..n.div_ceil(w))
-            .into_par_iter()
-            .flat_map_iter(|y| (y * w..((y + 1) * w).min(n)).filter(|&i| b.und.any(i)).map(|i| i as u32))
-            .collect();
         // None (no light has a map, or no borders): the classifiers, which need every
         // occluder's plane, are not made.
-        if pixels.is_empty() {
+        if !b.und.bits.par_iter().any(|&m| m != 0) {
             return RayCounts::default();
         }
         let cls = classifiers(&self.maps, self.planes, r);
-        let points: Vec<SurfaceHit> = pixels
-            .par_iter()
-            .map(|&i| r.shading_point(gbuffer, i as usize).expect("undecided pixels have a shading point"))
-            .collect();
-        // The rays, light by light, each light's in screen order: rays to one light from
-        // nearby points traverse the same nodes one after the other (the pixel-major order
-        // alternates lights, and a Morton order of the pixels measured slower than rows).
-        let und = &b.und;
-        let mut order: Vec<(u32, u32)> = Vec::new();
-        for l in 0..nl {
-            order.extend(
-                (0..pixels.len() as u32)
-                    .filter(|&k| und.get(pixels[k as usize] as usize, l))
-                    .map(|k| (l as u32, k)),
-            );
-        }
-        // Per chunk of rays: whether each is blocked, and whether its hint answered.
-        let answers: Vec<(Vec<(bool, bool)>, RayCounts)> = order
-            .par_chunks(RAY_CHUNK)
-            .map(|chunk| {
-                let mut c = RayCounts::default();
-                // A light's rays and its kept hints are both in pixel order: a cursor walks the
-                // hints alongside the rays (a search per ray cost a tenth of the pass).
-                let mut cursor: Option<(usize, usize)> = None;
-                let out = chunk
+        let (und, hints, resolution) = (&b.und, &self.hints, &self.resolution);
+        let band = w * BAND_ROWS;
+        let bands: Vec<(RayCounts, Vec<RayCounted>)> = b
+            .lit
+            .bits
+            .par_chunks_mut(band * stride)
+            .zip(b.by_hint.bits.par_chunks_mut(band * stride))
+            .zip(direct.par_chunks_mut(band))
+            .enumerate()
+            .map(|(n, ((lit, by_hint), direct))| {
+                let first = n * band;
+                let (mut c, mut counted) = (RayCounts::default(), vec![RayCounted::default(); nl]);
+                let pixels: Vec<usize> = (first..first + direct.len()).filter(|&i| und.any(i)).collect();
+                let points: Vec<SurfaceHit> = pixels
                     .iter()
-                    .map(|&(l, k)| {
-                        let (l, s) = (l as usize, &points[k as usize]);
-                        let i = pixels[k as usize];
-                        let kept = &self.hints[l];
-                        let mut at = match cursor {
-                            Some((cl, at)) if cl == l => at,
-                            _ => kept.partition_point(|e| e.pixel < i),
-                        };
-                        while kept.get(at).is_some_and(|e| e.pixel < i) {
+                    .map(|&i| r.shading_point(gbuffer, i).expect("undecided pixels have a shading point"))
+                    .collect();
+                // The pixels for which a ray overturned the map's decision of some light.
+                let mut overturned = vec![false; pixels.len()];
+                for (l, counted) in counted.iter_mut().enumerate() {
+                    // The light's kept hints are in pixel order too: a cursor walks them
+                    // alongside the rays (a search per ray cost a tenth of the pass).
+                    let kept = &hints[l];
+                    let mut at = kept.partition_point(|e| (e.pixel as usize) < first);
+                    let (byte, m) = (l / 8, 1u8 << (l % 8));
+                    for ((&i, s), overturned) in pixels.iter().zip(&points).zip(&mut overturned) {
+                        if !und.get(i, l) {
+                            continue;
+                        }
+                        while kept.get(at).is_some_and(|e| (e.pixel as usize) < i) {
                             at += 1;
                         }
-                        cursor = Some((l, at));
                         let hint = match kept.get(at) {
-                            Some(e) if e.pixel == i => e.hint,
+                            Some(e) if e.pixel as usize == i => e.hint,
                             // Undecided by the Laplacian, the dilation or no map: no lookup
                             // was kept; the map's texels give a cheaper hint.
-                            _ => hint(&cls[l], &self.resolution, l, s, r),
+                            _ => hint(&cls[l], resolution, l, s, r),
                         };
                         let ray = spawn_ray_to(s.p, s.p_err, s.ng, r.lights[l].position);
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
-                        r.pixel_rays.add(i as usize, &before, &c);
-                        (blocked, c.shadow_hint_hits > hits)
-                    })
-                    .collect();
-                (out, c)
+                        r.pixel_rays.add(i, &before, &c);
+                        let at = (i - first) * stride + byte;
+                        let map_lit = lit[at] & m != 0;
+                        counted.rays += 1;
+                        counted.map_lit += u64::from(map_lit);
+                        *overturned |= map_lit == blocked;
+                        if blocked {
+                            lit[at] &= !m;
+                        } else {
+                            lit[at] |= m;
+                        }
+                        if c.shadow_hint_hits > hits {
+                            by_hint[at] |= m;
+                        }
+                    }
+                }
+                // The direct light of the pixels whose decisions a ray overturned, again, with
+                // their final decisions. The others' is classify's, from the same decisions:
+                // `reflect` of the same geometry (`lanes` is `light_geometry` to the bit), or
+                // nothing for a pixel whose camera hit came after classify and whose rays all
+                // found shadow.
+                for ((&i, s), _) in pixels.iter().zip(&points).zip(&overturned).filter(|(_, o)| **o) {
+                    let bits = &lit[(i - first) * stride..][..stride];
+                    direct[i - first] =
+                        reflect(r, s, |l, light| if bit(bits, l) { light_geometry(s, light) } else { None });
+                }
+                (c, counted)
             })
             .collect();
         let mut total = RayCounts::default();
-        let und_counts = &mut self.und_counts;
-        // The pixels for which a ray overturned the map's decision of some light.
-        let mut overturned = vec![false; pixels.len()];
-        for (chunk, (out, c)) in order.chunks(RAY_CHUNK).zip(answers) {
-            for (&(l, k), (blocked, hinted)) in chunk.iter().zip(out) {
-                let (l, i) = (l as usize, pixels[k as usize] as usize);
-                let (byte, m) = (i * stride + l / 8, 1u8 << (l % 8));
-                let map_lit = b.lit.bits[byte] & m != 0;
-                und_counts[l].rays += 1;
-                und_counts[l].map_lit += u64::from(map_lit);
-                overturned[k as usize] |= map_lit == blocked;
-                if blocked {
-                    b.lit.bits[byte] &= !m;
-                } else {
-                    b.lit.bits[byte] |= m;
-                }
-                if hinted {
-                    b.by_hint.bits[byte] |= m;
-                }
-            }
+        let mut counted = Vec::with_capacity(bands.len());
+        for (c, per_light) in bands {
             total += c;
+            counted.push(per_light);
         }
-        // The direct light of the pixels whose decisions a ray overturned, again, with their
-        // final decisions. The others' is classify's, from the same decisions: `reflect` of
-        // the same geometry (`lanes` is `light_geometry` to the bit), or nothing for a pixel
-        // whose camera hit came after classify and whose rays all found shadow.
-        let lit = &b.lit;
-        let colors: Vec<(u32, Vec3)> = pixels
-            .par_iter()
-            .zip(&points)
-            .zip(&overturned)
-            .filter(|(_, o)| **o)
-            .map(|((&i, s), _)| {
-                let bits = lit.pixel(i as usize);
-                (i, reflect(r, s, |l, light| if bit(bits, l) { light_geometry(s, light) } else { None }))
-            })
-            .collect();
-        for (i, c) in colors {
-            direct[i as usize] = c;
+        for (u, c) in self.und_counts.iter_mut().zip(sum_per_light(counted, nl)) {
+            *u += c;
         }
         total
     }

@@ -36,13 +36,15 @@ pub fn run(
     // Only hits on mirror materials start a path: skip the others before building their
     // shading point.
     let paths: Vec<Path> = gbuffer
-        .par_iter()
+        .par_chunks(w.max(1))
         .enumerate()
-        .filter_map(|(i, hit)| {
-            let hit = hit.as_ref().filter(|h| kr_of(h.tri) != Vec3::ZERO)?;
-            let dir = r.camera_ray((i % w) as u32, (i / w) as u32).dir;
-            let hit = SurfaceHit::new(r.scene, hit, dir);
-            Some(Path { pixel: i as u32, hit, dist: hit.t, weight: Vec3::ONE, key: 0 })
+        .flat_map_iter(|(y, row)| {
+            row.iter().enumerate().filter_map(move |(x, hit)| {
+                let hit = hit.as_ref().filter(|h| kr_of(h.tri) != Vec3::ZERO)?;
+                let dir = r.camera_ray(x as u32, y as u32).dir;
+                let hit = SurfaceHit::new(r.scene, hit, dir);
+                Some(Path { pixel: (y * w + x) as u32, hit, dist: hit.t, weight: Vec3::ONE, key: 0 })
+            })
         })
         .collect();
     let (lo, hi) = r.bounds.unwrap_or_default();
@@ -55,7 +57,7 @@ pub fn run(
         // Each bounce leaves from the last one's hits (the camera hits first).
         let from = bounces.last().unwrap_or(&paths);
         let traced: Vec<(Vec<Path>, RayCounts)> = from
-            .par_chunks(256)
+            .par_chunks(CHUNK)
             .map(|chunk| {
                 let mut c = RayCounts::default();
                 let mut live = Vec::with_capacity(chunk.len());
@@ -74,13 +76,17 @@ pub fn run(
                 (live, c)
             })
             .collect();
-        let mut next = Vec::with_capacity(from.len());
-        for (live, c) in traced {
-            next.extend(live);
+        let mut live = Vec::with_capacity(from.len());
+        for (paths, c) in traced {
+            live.extend(paths);
             total += c;
         }
         // Spatial order; ties by pixel, so the order (and nothing else) is deterministic.
-        next.par_sort_unstable_by_key(|p| (p.key, p.pixel));
+        // The keys are sorted, not the paths (a hundred bytes each), which then move once.
+        let mut keys: Vec<(u64, u32, u32)> =
+            live.par_iter().enumerate().map(|(i, p)| (p.key, p.pixel, i as u32)).collect();
+        keys.par_sort_unstable();
+        let next: Vec<Path> = keys.par_iter().map(|&(_, _, i)| live[i as usize]).collect();
         if next.is_empty() {
             break;
         }
@@ -97,7 +103,7 @@ pub fn run(
     let mut rows_reported = 0;
     for (d, hits) in bounces.iter().enumerate() {
         let shaded: Vec<(Vec<Terms>, RayCounts)> = hits
-            .par_chunks(256)
+            .par_chunks(CHUNK)
             .map(|chunk| {
                 let mut c = RayCounts::default();
                 // Indirect light at the chunk's hits together: VPL by VPL, with the vector
@@ -130,7 +136,7 @@ pub fn run(
             })
             .collect();
         // Added as `reflected` adds them: the direct term, then the indirect one.
-        for (chunk, (terms, c)) in hits.chunks(256).zip(shaded) {
+        for (chunk, (terms, c)) in hits.chunks(CHUNK).zip(shaded) {
             for (p, (direct, indirect)) in chunk.iter().zip(terms) {
                 let o = &mut out[p.pixel as usize];
                 *o += direct;
@@ -152,6 +158,10 @@ pub fn run(
     }
     total
 }
+
+/// Paths per parallel task: small enough that the two halves of a bounce (whose paths, in
+/// spatial order, cost unevenly) balance on a few threads.
+const CHUNK: usize = 64;
 
 /// A mirror hit's weighted direct light, and its weighted indirect light (with VPLs).
 type Terms = (Vec3, Option<Vec3>);

@@ -211,7 +211,7 @@ fn bench(a: &BenchArgs) -> Result<()> {
             }
             bar.inc_length(UNTEXTURED.len() as u64 * (1 + u64::from(a.runs)) + u64::from(!a.no_check));
         }
-        let mo = MeasureOptions { runs: a.runs as usize, check: !a.no_check };
+        let mo = MeasureOptions { runs: a.runs as usize, check: !a.no_check, same_rays: true };
         let mut ms = measure::measure(sc, &cs, None, mo, &|label| {
             bar.set_message(format!("{} {label}", sc.name));
             bar.inc(1);
@@ -474,7 +474,11 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
          its border rays (`shadow_rays`: the camera hits' pairs a ray decides, hint first, those \
          pixels shaded again; the shadow rays of mirror hits belong to `specular`), the reference's \
          shadow rays (its `direct` pass, shading included; rasterized visibility), and the mirror \
-         rays of each (`specular`, their hits shaded).\n"
+         rays of each (`specular`, their hits shaded). The border rays are the frame's hardest \
+         shadow rays by selection (each passes an occluder's silhouette); the last columns trace \
+         one frame's rays again in this process, on one thread and with no shading: the border \
+         rays as the reference traces its shadow rays and with their hint, and every shadow ray \
+         of the frame's pairs as the reference does (`hyrt::render::shadows::SameRays`).\n"
     );
     let mut tu = Table::new(
         &[
@@ -486,6 +490,9 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             "reference shadow rays",
             "ns per reference shadow ray",
             "ns per mirror ray reference / SMeRTS",
+            "same rays: ns per border ray, plain / hint",
+            "ns per shadow ray of the frame, plain",
+            "border / frame, plain",
         ],
         1,
     );
@@ -504,6 +511,9 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
                 per_unit(pass_ms(b, "specular"), b.rays.specular),
                 per_unit(pass_ms(c, "specular"), c.rays.specular)
             ),
+            c.same_rays.map_or("-".into(), |q| format!("{:.0} / {:.0}", q.border_plain_ns, q.border_hint_ns)),
+            c.same_rays.map_or("-".into(), |q| format!("{:.0}", q.all_plain_ns)),
+            c.same_rays.map_or("-".into(), |q| ratio(q.border_plain_ns, q.all_plain_ns)),
         ]);
     }
     s.push_str(&tu.markdown());

@@ -20,7 +20,7 @@ use serde::Serialize;
 pub use hyrt::metrics::{Timing, psnr, wrong_visibility};
 use hyrt::{
     film::Film,
-    render::{Frame, Options, Pass, Renderer, Shadows},
+    render::{Frame, Options, Pass, Renderer, Shadows, shadows::SameRays},
     scene::Scene,
 };
 
@@ -74,6 +74,9 @@ pub struct Measurement {
     /// ray contradicts, summed over the lights, and the number of distinct such pixels.
     pub wrong_pairs: Option<u64>,
     pub wrong_pixels: Option<u64>,
+    /// Border rays with shadow rays from the reference's: what each costs traced alike, on
+    /// one frame's very rays ([`hyrt::render::shadows::SameRays`]; with border rays only).
+    pub same_rays: Option<SameRays>,
     /// The last frame's film (not serialised).
     #[serde(skip)]
     pub film: Film,
@@ -87,7 +90,13 @@ pub struct MeasureOptions {
     /// Render one more, untimed frame with `check_visibility` to count wrong-visibility pixels
     /// (configurations with map-based shadows only).
     pub check: bool,
+    /// Trace one frame's border rays and shadow rays again, alike, in this process
+    /// (configurations with border rays only): [`Measurement::same_rays`].
+    pub same_rays: bool,
 }
+
+/// Runs of each set of rays in [`Renderer::same_rays`].
+const SAME_RAYS_RUNS: usize = 5;
 
 /// A fresh [`Renderer`] of `options` and its first frame, as one image costs from the command
 /// line: the wall time of [`Renderer::new`] (BVH, plan) and of the frame (light maps, VPLs and
@@ -160,6 +169,7 @@ pub fn measure(
             psnr_db: None,
             wrong_pairs: None,
             wrong_pixels: None,
+            same_rays: None,
             film: f.film,
         });
         renderers.push(r);
@@ -193,6 +203,20 @@ pub fn measure(
     }
     drop(renderers);
 
+    if mo.same_rays {
+        for (m, c) in out.iter_mut().zip(configs) {
+            if c.options.shadows != Shadows::Smerts {
+                continue;
+            }
+            // A warm frame, its buffers kept: the timed frames' decisions.
+            let options = Options { keep_buffers: true, ..c.options };
+            let r = Renderer::new(c.scene.as_deref().unwrap_or(scene), options);
+            r.render(&|| {});
+            m.same_rays = r.same_rays(&r.render(&|| {}), SAME_RAYS_RUNS);
+            progress(&c.label);
+        }
+    }
+
     if mo.check {
         for (m, c) in out.iter_mut().zip(configs) {
             if c.options.shadows == Shadows::Rays {
@@ -224,17 +248,24 @@ mod tests {
             Config { label: "hybrid".into(), options: Options::hybrid(), scene: None },
         ];
         let calls = std::sync::atomic::AtomicUsize::new(0);
-        let mo = MeasureOptions { runs: 3, check: true };
+        let mo = MeasureOptions { runs: 3, check: true, same_rays: true };
         let m = measure(&scene, &configs, Some(&reference), mo, &|_| {
             calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         })
         .unwrap();
-        // 2 warm-up + 2 x 3 timed + 1 check frame (the reference has no map decisions).
-        assert_eq!(calls.into_inner(), 2 + 6 + 1);
+        // 2 warm-up + 2 x 3 timed + 1 check frame (the reference has no map decisions) + 1
+        // frame whose rays are traced again (the reference has no border rays).
+        assert_eq!(calls.into_inner(), 2 + 6 + 1 + 1);
         assert_eq!(m[0].frame_ms.runs, 3);
         assert_eq!(m[0].psnr_db, Some(f64::INFINITY));
         assert!(m[1].psnr_db.unwrap() > 30.0, "{:?}", m[1].psnr_db);
         assert_eq!(m[0].wrong_pairs, None);
+        // The border rays traced again are the timed frames' own, and among the frame's pairs.
+        assert!(m[0].same_rays.is_none());
+        let same = m[1].same_rays.expect("the hybrid has border rays");
+        assert_eq!(same.border_rays, m[1].border_rays);
+        assert!(same.all_rays >= same.border_rays && same.all_rays <= m[1].map_decisions, "{same:?}");
+        assert!(same.border_plain_ns > 0.0 && same.border_hint_ns > 0.0 && same.all_plain_ns > 0.0);
         let (pairs, pixels) = (m[1].wrong_pairs.unwrap(), m[1].wrong_pixels.unwrap());
         assert!(pixels <= pairs, "{pixels} > {pairs}");
         // Raster visibility: a ray only where a pixel's ray leaves its rasterized triangle.

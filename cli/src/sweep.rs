@@ -320,7 +320,7 @@ pub fn run(a: &SweepArgs) -> Result<()> {
         }
     }
 
-    let mo = MeasureOptions { runs, check: true };
+    let mo = MeasureOptions { runs, check: true, same_rays: false };
     let exposure = scene.settings.exposure;
     let ref_config = Config { label: "reference".into(), options: ref_options, scene: None };
     let mut m = measure(&scene, std::slice::from_ref(&ref_config), None, mo, &progress)?.remove(0);

@@ -10,9 +10,9 @@
 //!              map decision -> faces, lit, edge (the 2x2 texel footprint disagrees; its occluder
 //!              hint kept); then the tile's direct light from those decisions
 //! borders      (Smerts) und = dilate(edge and/or laplacian(lit, faces), R), byte ops over 8 lights
-//! shadow_rays  the undecided (pixel, light) pairs listed light by light, in screen order: a
-//!              shadow ray each (the hint classify kept first), in fixed chunks; the
-//!              answers into lit, and the direct light of those pixels again; then, for the
+//! shadow_rays  by bands of two rows, the undecided (pixel, light) pairs light by light, in
+//!              screen order: a shadow ray each (the hint classify kept first), the answers
+//!              into lit, and the direct light of the pixels they overturned again; then, for the
 //!              lights without a map, a shadow ray per pixel facing them, streamed by rows,
 //!              each testing the light's last blocker in the row first (on a first frame, the
 //!              rows are prepared while the BVH is still building)
@@ -32,7 +32,8 @@
 //! One concept per file: `marking` (which pages or faces a view needs, at what level),
 //! `payoff` (which lights get a map at all), `map_cache` (the maps kept between frames),
 //! `classify`, `borders`, `border_rays`, `light_rays` (the passes), `mirror_hits` (decisions at
-//! mirror hits), `lookup` (a point's decision in one map); this file holds the per-pixel
+//! mirror hits), `lookup` (a point's decision in one map), `same_rays` (what border rays cost
+//! against the reference's, traced alike); this file holds the per-pixel
 //! buffers and counts the passes share.
 
 mod border_rays;
@@ -45,6 +46,7 @@ mod map_cache;
 mod marking;
 mod mirror_hits;
 mod payoff;
+mod same_rays;
 
 use std::sync::Arc;
 
@@ -64,6 +66,7 @@ use super::{Renderer, SurfaceHit};
 pub(crate) use lookup::sees_hole;
 pub(crate) use map_cache::MapCache;
 pub use marking::resolution_guide;
+pub use same_rays::SameRays;
 
 /// Per-light classification counts of one frame (camera hits only).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]

@@ -1072,7 +1072,10 @@ impl LightMap {
     /// Coordinates are clamped into `[0, resolution)` (a direction on a cube edge or corner goes
     /// to the face [`cube_lookup`] picks, at its last texel), and for paraboloids into a texel
     /// whose centre is in the disc (module docs). NaN gives some in-range texel.
-    #[inline]
+    // Always inlined: a cube map's path is a few instructions, called per point and light by
+    // the classify pass, where the compiler's own choice varied with the caller's size and
+    // out of line measured slower.
+    #[inline(always)]
     pub fn coord_at(&self, dir: Vec3, level: u8) -> MapCoord {
         let res = self.resolution_at(level);
         if self.layout == Layout::Cube {

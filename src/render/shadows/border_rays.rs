@@ -37,6 +37,7 @@ impl Shadowing<'_> {
         }
         let cls = classifiers(&self.maps, self.planes, r);
         let (und, hints, resolution) = (&b.und, &self.hints, &self.resolution);
+        let kept_points = &self.border_points;
         let band = w * BAND_ROWS;
         let bands: Vec<(RayCounts, Vec<RayCounted>)> = b
             .lit
@@ -49,9 +50,21 @@ impl Shadowing<'_> {
                 let first = n * band;
                 let (mut c, mut counted) = (RayCounts::default(), vec![RayCounted::default(); nl]);
                 let pixels: Vec<usize> = (first..first + direct.len()).filter(|&i| und.any(i)).collect();
+                // Classify's shading points where it kept them (map-space borders), walked in
+                // pixel order beside the pixels; made again for the others (the Laplacian's,
+                // the dilation's, camera hits found after classify).
+                let mut at = kept_points.partition_point(|e| (e.0 as usize) < first);
                 let points: Vec<SurfaceHit> = pixels
                     .iter()
-                    .map(|&i| r.shading_point(gbuffer, i).expect("undecided pixels have a shading point"))
+                    .map(|&i| {
+                        while kept_points.get(at).is_some_and(|e| (e.0 as usize) < i) {
+                            at += 1;
+                        }
+                        match kept_points.get(at) {
+                            Some(&(p, s)) if p as usize == i => s,
+                            _ => r.shading_point(gbuffer, i).expect("undecided pixels have a shading point"),
+                        }
+                    })
                     .collect();
                 // The pixels for which a ray overturned the map's decision of some light.
                 let mut overturned = vec![false; pixels.len()];

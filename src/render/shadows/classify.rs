@@ -31,6 +31,8 @@ struct Band<'a> {
 struct BandOut {
     counts: Vec<MapCounts>,
     hints: Vec<Vec<BorderHint>>,
+    /// The shading points of the band's pixels with a map-space border, in pixel order.
+    points: Vec<(u32, SurfaceHit)>,
 }
 
 /// Side of the square pixel tiles of the classify pass: its shading points stay in L1 while
@@ -112,11 +114,12 @@ impl Renderer<'_> {
             let mut counts = vec![MapCounts::default(); nl];
             // Per light, the band's map-space borders and their occluder hints.
             let mut hints: Vec<Vec<BorderHint>> = vec![Vec::new(); nl];
+            let mut border_points = Vec::new();
             // No light with a map: nothing to decide; the ray pass shades every pixel and
             // makes the shading points (`Shadowing::trace_without_maps`).
             if no_map {
                 (0..rows).for_each(|_| progress());
-                return BandOut { counts, hints };
+                return BandOut { counts, hints, points: border_points };
             }
             // Per tile: the shading points and the lights they face, then per light every
             // point's location and decision, then the points' direct light from those
@@ -210,6 +213,8 @@ impl Renderer<'_> {
                     (full && on_one(group(&tile[quarter(q, 0)].1)))
                         .then(|| [0, H - 1, H * H - H, H * H - 1].map(|i| tile[quarter(q, i)].1.p))
                 });
+                // The tile's points with a map-space border for some light, a bit each.
+                let mut bordered = 0u64;
                 for (l, c) in cls.iter().enumerate() {
                     if by_rays[l] {
                         continue;
@@ -272,6 +277,7 @@ impl Renderer<'_> {
                         counts[l].by_suspects += u64::from(settled.is_some());
                         if lk.map_border && settled.is_none() {
                             edge[j * stride + byte] |= bit;
+                            bordered |= 1 << k;
                             hints[l].push(BorderHint { pixel: (first + j) as u32, hint: lk.hint });
                         }
                     }
@@ -281,10 +287,17 @@ impl Renderer<'_> {
                     let g = &geo[k * nl..][..nl];
                     out[*j] = reflect(self, s, |l, _| if bit(lb, l) { g[l] } else { None });
                 }
+                // Kept for the border rays, which would make the points again.
+                while bordered != 0 {
+                    let (j, s) = &tile[bordered.trailing_zeros() as usize];
+                    border_points.push(((first + j) as u32, *s));
+                    bordered &= bordered - 1;
+                }
             }
             (0..rows).for_each(|_| progress());
             hints.iter_mut().for_each(|h| h.sort_unstable_by_key(|e| e.pixel));
-            BandOut { counts, hints }
+            border_points.sort_unstable_by_key(|e| e.0);
+            BandOut { counts, hints, points: border_points }
         };
         let bands: Vec<BandOut> = match points {
             Some(p) => bands
@@ -297,6 +310,7 @@ impl Renderer<'_> {
         // The bands' lists in band order: each light's in pixel order.
         let hints =
             (0..nl).map(|l| bands.iter().flat_map(|b| b.hints[l].iter().copied()).collect()).collect();
+        let border_points = bands.iter().flat_map(|b| b.points.iter().copied()).collect();
         let map_counts = sum_per_light(bands.into_iter().map(|b| b.counts).collect(), nl);
 
         let needed = self.maps.needed.get();
@@ -330,6 +344,7 @@ impl Renderer<'_> {
             added,
             und_counts,
             hints,
+            border_points,
             by_rays,
             mirror_pages,
         }

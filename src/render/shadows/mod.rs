@@ -8,7 +8,8 @@
 //!              with a finite horizon, only for the lights whose maps pay for themselves in it
 //! classify     8x8 tile by tile: the shading points, then per light each point's location and
 //!              map decision -> faces, lit, edge (the 2x2 texel footprint disagrees; its occluder
-//!              hint kept); then the tile's direct light from those decisions
+//!              hint kept); then the tile's direct light from those decisions (and the
+//!              shading points of the pixels with an edge kept, for their border rays)
 //! borders      (Smerts) und = dilate(edge and/or laplacian(lit, faces), R), byte ops over 8 lights
 //! shadow_rays  by bands of two rows, the undecided (pixel, light) pairs light by light, in
 //!              screen order: a shadow ray each (the hint classify kept first), the answers
@@ -224,6 +225,10 @@ pub struct Shadowing<'r> {
     /// hints ([`Lookup::hint`]), as the classify pass found them: a border ray tests that
     /// triangle first without looking the point up again.
     hints: Vec<Vec<BorderHint>>,
+    /// The shading points of the pixels with a map-space border, in pixel order, as the classify
+    /// pass made them: the border rays leave from them (the camera hits of those pixels are
+    /// final before classify; pixels whose hit came after it have none).
+    border_points: Vec<(u32, SurfaceHit)>,
     /// Per light, whether shadow rays decide it this frame (no map).
     pub(crate) by_rays: Vec<bool>,
     /// Per light, the pages drawn for mirror hits this frame ([`Shadowing::draw_mirror_pages`]).

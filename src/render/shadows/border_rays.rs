@@ -21,10 +21,11 @@ impl Shadowing<'_> {
     /// answer replaces the map's; the direct light of the pixels whose decision a ray
     /// overturned is computed again into `direct`.
     ///
-    /// One task per band of [`BAND_ROWS`] rows: its pixels with rays and their shading points,
-    /// then light by light, each light's rays in screen order (rays to one light from nearby
-    /// points traverse the same nodes one after the other; the pixel-major order alternates
-    /// lights, and a Morton order of the pixels measured slower than rows), then the shading.
+    /// One task per band of a few rows (`BAND_ROWS`): its pixels with rays and their shading
+    /// points, then light by light, each light's rays in screen order (rays to one light from
+    /// nearby points traverse the same nodes one after the other; the pixel-major order
+    /// alternates lights, and a Morton order of the pixels measured slower than rows), then the
+    /// shading.
     pub fn trace(&mut self, r: &Renderer, gbuffer: &[Option<Hit>], direct: &mut [Vec3]) -> RayCounts {
         let nl = self.maps.len();
         let w = r.scene.settings.width.max(1) as usize;

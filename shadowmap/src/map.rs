@@ -1297,8 +1297,9 @@ impl LightMap {
     /// hold, every one at least once (some more than once), as [`LightMap::id_at`] gives
     /// them ([`ABSENT`] for a page a paged map did not draw), until it returns `false`;
     /// whether it never did. For the tile test where [`LightMap::region_id`] sees several
-    /// triangles: a block its summary says holds one triangle is seen once, a mixed block
-    /// texel by texel (runs of one id once).
+    /// triangles: a block its summary says holds one triangle is seen once, a mixed block of a
+    /// palette page each of its palette entries once, of other pages texel by texel (runs of
+    /// one id once).
     #[allow(clippy::too_many_arguments)]
     pub fn region_ids(
         &self,
@@ -1351,10 +1352,27 @@ impl LightMap {
                 let all = match f.kept(slot) {
                     Kept::One(id) => see(id),
                     Kept::Palette { at, page, .. } => {
+                        // The palette entries the block's texels use, a bit each, then each
+                        // entry's id once: a block holds few distinct ids in many texels.
                         let (index, palette) =
                             (&f.index[page as usize * PAGE_TEXELS..], &f.palette[at as usize..]);
-                        rows.into_iter()
-                            .all(|t| index[t..t + width].iter().all(|&i| see(palette[usize::from(i)])))
+                        let mut used = [0u64; 4];
+                        for t in rows {
+                            for &i in &index[t..t + width] {
+                                used[usize::from(i >> 6)] |= 1 << (i & 63);
+                            }
+                        }
+                        used.iter().enumerate().all(|(w, &bits)| {
+                            let mut bits = bits;
+                            while bits != 0 {
+                                let i = w * 64 + bits.trailing_zeros() as usize;
+                                bits &= bits - 1;
+                                if !see(palette[i]) {
+                                    return false;
+                                }
+                            }
+                            true
+                        })
                     }
                     Kept::Ids { page } => {
                         let ids = &f.id[page as usize * PAGE_TEXELS..];

@@ -297,3 +297,47 @@ fn pages_of_one_id_store_that_id_alone() {
     assert!(paged.memory_bytes() < texels / 2, "{} of {texels}", paged.memory_bytes());
     assert_eq!(merged.memory_bytes(), paged.memory_bytes());
 }
+
+/// `LightMap::region_ids` reports every id the box's texels hold and no other (pages of one
+/// id, palettes and plain ids; boxes across blocks, pages and pages not drawn), as reading each
+/// texel with `id_at` does.
+#[test]
+fn region_ids_are_the_ids_of_the_boxs_texels() {
+    let tris = scene(23, 900);
+    let light = Vec3::new(0.05, 0.1, -0.02);
+    // Every other page of level 3: boxes meet drawn pages and absent ones.
+    let pages: Vec<PageKey> = all_pages(3).into_iter().filter(|k| (k.px + k.py) % 2 == 0).collect();
+    let map = LightMap::build_pages(&tris, light, &opts(0), &pages, &[]);
+    let res = PAGE << 3;
+    let mut rng = Rng(5);
+    let (mut boxes, mut mixed) = (0, 0);
+    for _ in 0..3000 {
+        let face = rng.below(6) as u8;
+        let (x0, y0) = (rng.below(res as usize) as u32, rng.below(res as usize) as u32);
+        let (x1, y1) = ((x0 + rng.below(40) as u32).min(res - 1), (y0 + rng.below(40) as u32).min(res - 1));
+        let mut truth: Vec<u32> = (y0..=y1)
+            .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+            .map(|(x, y)| map.id_at(3, face, x, y))
+            .collect();
+        truth.sort_unstable();
+        truth.dedup();
+        let mut seen = Vec::new();
+        assert!(map.region_ids(face, 3, x0, y0, x1, y1, |id| {
+            seen.push(id);
+            true
+        }));
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen, truth, "face {face}, [{x0}, {x1}] x [{y0}, {y1}]");
+        boxes += 1;
+        mixed += usize::from(truth.len() > 2);
+    }
+    // Stopping: the first `false` ends the walk.
+    let mut calls = 0;
+    assert!(!map.region_ids(0, 3, 0, 0, res - 1, res - 1, |_| {
+        calls += 1;
+        false
+    }));
+    assert_eq!(calls, 1);
+    assert!(mixed > boxes / 10, "too few boxes of several triangles: {mixed} of {boxes}");
+}

@@ -16,6 +16,16 @@ use crate::render::{Renderer, Shadows, SurfaceHit};
 /// one light still go out in screen order, from neighbouring points.
 const BAND_ROWS: usize = 2;
 
+/// The entry of pixel `i` in `list` (in increasing pixel order, `pixel` of each), walking
+/// cursor `at` forward to it: the pass's pixels come in increasing order too, so a walk beside
+/// them replaces a search per pixel.
+fn walk<'a, T>(list: &'a [T], at: &mut usize, pixel: impl Fn(&T) -> u32, i: usize) -> Option<&'a T> {
+    while list.get(*at).is_some_and(|e| (pixel(e) as usize) < i) {
+        *at += 1;
+    }
+    list.get(*at).filter(|e| pixel(e) as usize == i)
+}
+
 impl Shadowing<'_> {
     /// The `shadow_rays` pass: one shadow ray (hint first) per undecided (pixel, light), whose
     /// answer replaces the map's; the direct light of the pixels whose decision a ray
@@ -57,14 +67,9 @@ impl Shadowing<'_> {
                 let mut at = kept_points.partition_point(|e| (e.0 as usize) < first);
                 let points: Vec<SurfaceHit> = pixels
                     .iter()
-                    .map(|&i| {
-                        while kept_points.get(at).is_some_and(|e| (e.0 as usize) < i) {
-                            at += 1;
-                        }
-                        match kept_points.get(at) {
-                            Some(&(p, s)) if p as usize == i => s,
-                            _ => r.shading_point(gbuffer, i).expect("undecided pixels have a shading point"),
-                        }
+                    .map(|&i| match walk(kept_points, &mut at, |e| e.0, i) {
+                        Some(&(_, s)) => s,
+                        None => r.shading_point(gbuffer, i).expect("undecided pixels have a shading point"),
                     })
                     .collect();
                 // The pixels for which a ray overturned the map's decision of some light.
@@ -79,11 +84,8 @@ impl Shadowing<'_> {
                         if !und.get(i, l) {
                             continue;
                         }
-                        while kept.get(at).is_some_and(|e| (e.pixel as usize) < i) {
-                            at += 1;
-                        }
-                        let hint = match kept.get(at) {
-                            Some(e) if e.pixel as usize == i => e.hint,
+                        let hint = match walk(kept, &mut at, |e| e.pixel, i) {
+                            Some(e) => e.hint,
                             // Undecided by the Laplacian, the dilation or no map: no lookup
                             // was kept; the map's texels give a cheaper hint.
                             _ => hint(&cls[l], resolution, l, s, r),
@@ -92,18 +94,18 @@ impl Shadowing<'_> {
                         let (before, hits) = (c, c.shadow_hint_hits);
                         let blocked = r.tracer.occluded_with_hint(&ray, hint, &mut c);
                         r.pixel_rays.add(i, &before, &c);
-                        let at = (i - first) * stride + byte;
-                        let map_lit = lit[at] & m != 0;
+                        let o = (i - first) * stride + byte;
+                        let map_lit = lit[o] & m != 0;
                         counted.rays += 1;
                         counted.map_lit += u64::from(map_lit);
                         *overturned |= map_lit == blocked;
                         if blocked {
-                            lit[at] &= !m;
+                            lit[o] &= !m;
                         } else {
-                            lit[at] |= m;
+                            lit[o] |= m;
                         }
                         if c.shadow_hint_hits > hits {
-                            by_hint[at] |= m;
+                            by_hint[o] |= m;
                         }
                     }
                 }

@@ -15,7 +15,7 @@ use super::map_cache::FrameMaps;
 use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, bit, sum_per_light};
 use crate::render::gather::ShadePoint;
 use crate::render::light::{PlaneSides, is_dark, lights_along, on_viewer_side, reflect, seen_winding};
-use crate::render::{FrameStats, Progress, Renderer, SurfaceHit};
+use crate::render::{FrameStats, Progress, Renderer, Shadows, SurfaceHit};
 
 /// One band of rows of classify's outputs: the direct light, and the face, lit and edge bits.
 struct Band<'a> {
@@ -92,6 +92,8 @@ impl Renderer<'_> {
         let planes: &'r [Plane] = if no_map { &[] } else { self.occluders().0 };
         let cls = if no_map { Vec::new() } else { classifiers(&maps, planes, self) };
         let groups = if no_map { &[][..] } else { self.plane_groups() };
+        // Only border rays (Smerts) leave from the border pixels' shading points.
+        let keep_points = self.options.shadows == Shadows::Smerts;
         bufs.faces.reset(n, nl);
         bufs.lit.reset(n, nl);
         bufs.edge.reset(n, nl);
@@ -288,7 +290,7 @@ impl Renderer<'_> {
                     out[*j] = reflect(self, s, |l, _| if bit(lb, l) { g[l] } else { None });
                 }
                 // Kept for the border rays, which would make the points again.
-                while bordered != 0 {
+                while keep_points && bordered != 0 {
                     let (j, s) = &tile[bordered.trailing_zeros() as usize];
                     border_points.push(((first + j) as u32, *s));
                     bordered &= bordered - 1;

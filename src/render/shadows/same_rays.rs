@@ -53,6 +53,9 @@ impl Renderer<'_> {
                 border.push((spawn_ray_to(s.p, s.p_err, s.ng, light.position), shadows.hint[l][i]));
             }
         }
+        if border.is_empty() {
+            return None;
+        }
         let mut all: Vec<Ray> = Vec::new();
         for i in 0..gbuffer.len() {
             let decided = |l: usize| shadows.occ[l][i] != Decision::NotNeeded;
@@ -63,9 +66,6 @@ impl Renderer<'_> {
             for (_, light) in self.lights.iter().enumerate().filter(|(l, _)| decided(*l)) {
                 all.push(spawn_ray_to(s.p, s.p_err, s.ng, light.position));
             }
-        }
-        if border.is_empty() {
-            return None;
         }
         // The answers are summed so that no trace is optimised away.
         let time = |f: &mut dyn FnMut() -> usize, n: usize| {

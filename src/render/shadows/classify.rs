@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use super::lanes::{FromLight, LANES, TileLanes};
 use super::lookup::{classifiers, settle};
 use super::map_cache::FrameMaps;
-use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, bit, sum_per_light};
+use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, sum_per_light};
 use crate::render::gather::ShadePoint;
 use crate::render::light::{PlaneSides, is_dark, lights_along, on_viewer_side, reflect, seen_winding};
 use crate::render::{FrameStats, Progress, Renderer, Shadows, SurfaceHit};
@@ -41,6 +41,25 @@ const TILE: usize = 8;
 /// Half a [`TILE`]: the side of the quarters whose points the tile test decides at once when the
 /// whole tile's cannot.
 const H: usize = TILE / 2;
+/// Point `i` (row-major) of quarter `q` (row-major) of a full tile, as the index of a point of
+/// the tile (row-major).
+const fn quarter(q: usize, i: usize) -> usize {
+    (q / 2 * H + i / H) * TILE + q % 2 * H + i % H
+}
+/// The points of each quarter of a full tile, a bit each.
+const QUARTERS: [u64; 4] = {
+    let mut m = [0u64; 4];
+    let mut q = 0;
+    while q < 4 {
+        let mut i = 0;
+        while i < H * H {
+            m[q] |= 1 << quarter(q, i);
+            i += 1;
+        }
+        q += 1;
+    }
+    m
+};
 // A tile's points are bits of a `u64` in the classify pass, and lanes of `TileLanes`.
 const _: () = assert!(TILE * TILE <= 64 && TILE * TILE <= LANES);
 
@@ -83,7 +102,6 @@ impl Renderer<'_> {
         let receiver = |s: &SurfaceHit| resolution.first().map_or(0.0, |g| g.receiver(s.p, s.ng.dot(s.wo)));
         // Levels through their ratios (`Resolution::ratio`): a tile's finest level is that of
         // its largest ratio.
-        let ratio = |l: usize, recv: f32, t: LightTerms| resolution.get(l).map_or(0.0, |r| r.ratio(recv, t));
         let level = |l: usize, ratio: f32| resolution.get(l).map_or(0, |r| r.level_of_ratio(ratio));
 
         // No light with a map: nothing is decided here, and the occluders' planes and groups
@@ -129,24 +147,26 @@ impl Renderer<'_> {
             // slower once pages were compact: the page-table walk it repeats costs more than
             // the misses it hides.)
             let mut tile: Vec<(usize, SurfaceHit)> = Vec::with_capacity(TILE * TILE);
-            // The same points a lane each, and one light seen from them (`lanes`).
+            // The same points a lane each, and each light seen from them (`lanes`): kept for
+            // the shading.
             let mut lanes = TileLanes::new();
-            let mut from = FromLight::new();
+            let mut froms: Vec<FromLight> = (0..nl).map(|_| FromLight::new()).collect();
             // Per point of the tile, its receiver factor; per light and point (`l * LANES + k`),
             // its level's ratio.
             let mut recv: Vec<f32> = Vec::with_capacity(TILE * TILE);
             let mut ratios: Vec<f32> = vec![0.0; LANES * nl];
             let mut located = Vec::with_capacity(TILE * TILE);
-            // Per point of the tile and light, `light_geometry`, and whether the light is on
-            // the side of the point's plane it is seen from.
-            let mut geo: Vec<Option<(Vec3, f32, f32)>> = Vec::with_capacity(TILE * TILE * nl);
-            let mut side: Vec<bool> = Vec::with_capacity(TILE * TILE * nl);
+            // Per light, a bit per point of the tile (`k` for point `k`): the points on the side
+            // of their plane it is seen from, those it faces (that side, and it shines on them:
+            // the `faces` bits), those it lights (`lit`); written to the per-pixel buffers once
+            // the tile is decided.
+            let (mut side, mut facing, mut lit_by) = (vec![0u64; nl], vec![0u64; nl], vec![0u64; nl]);
             let mut sides = PlaneSides::new();
             for x0 in (0..w).step_by(TILE) {
                 tile.clear();
                 lanes.clear();
                 recv.clear();
-                side.clear();
+                side.fill(0);
                 let x1 = (x0 + TILE).min(w);
                 for y in 0..rows {
                     for j in y * w + x0..y * w + x1 {
@@ -161,7 +181,9 @@ impl Renderer<'_> {
                         let sd = sides.of(s.tri, tri, lights);
                         // `facing`'s side test, with the plane sides and the winding reused.
                         let seen = seen_winding(&s, tri);
-                        side.extend(sd.iter().map(|&d| on_viewer_side(seen, d)));
+                        for (m, &d) in side.iter_mut().zip(sd) {
+                            *m |= u64::from(on_viewer_side(seen, d)) << tile.len();
+                        }
                         recv.push(receiver(&s));
                         lanes.push(&s);
                         tile.push((j, s));
@@ -171,28 +193,37 @@ impl Renderer<'_> {
                 // bit and its level's ratio. A light without a map: the ray pass decides and
                 // shades it. With no `faces` bit it has no border either (borders are within
                 // `faces`).
-                geo.clear();
-                geo.resize(tile.len() * nl, None);
+                facing.fill(0);
+                lit_by.fill(0);
                 for (l, light) in lights.iter().enumerate() {
                     if by_rays[l] {
                         continue;
                     }
-                    lanes.seen_from(light.position, &mut from);
-                    let (byte, bit) = (l / 8, 1u8 << (l % 8));
-                    let dark = is_dark(light);
-                    for (k, (j, _)) in tile.iter().enumerate() {
-                        // `light_geometry_and_terms`, on its arithmetic done a lane a point.
-                        let g = if dark || from.d2[k] == 0.0 {
-                            None
-                        } else {
-                            lights_along(light, from.wi(k), from.cos[k], from.d2[k])
-                        };
-                        if g.is_some() && side[k * nl + l] {
-                            faces[j * stride + byte] |= bit;
+                    let from = &mut froms[l];
+                    lanes.seen_from(light.position, from);
+                    // `light_geometry_and_terms`, on its arithmetic done a lane a point: where
+                    // it gives the light's geometry.
+                    let mut shines = 0u64;
+                    if !is_dark(light) {
+                        for k in 0..tile.len() {
+                            let g = from.d2[k] != 0.0
+                                && lights_along(light, from.wi(k), from.cos[k], from.d2[k]).is_some();
+                            shines |= u64::from(g) << k;
                         }
-                        geo[k * nl + l] = g;
-                        ratios[l * LANES + k] =
-                            ratio(l, recv[k], LightTerms { r: from.r[k], cos_light: from.cos_light[k] });
+                    }
+                    facing[l] = shines & side[l];
+                    // (A loop of the lanes' arithmetic, one guide for all the points.)
+                    let ratios = &mut ratios[l * LANES..][..tile.len()];
+                    match resolution.get(l) {
+                        Some(g) => {
+                            for (k, q) in ratios.iter_mut().enumerate() {
+                                *q = g.ratio(
+                                    recv[k],
+                                    LightTerms { r: from.r[k], cos_light: from.cos_light[k] },
+                                );
+                            }
+                        }
+                        None => ratios.fill(0.0),
                     }
                 }
                 // A tile wholly on one plane (triangles of one group): its corner points may
@@ -209,7 +240,6 @@ impl Renderer<'_> {
                 // points). A tile on one plane tries them too: what defeats the whole tile (an
                 // occluder's edge, a neighbouring triangle) often lies under one quarter.
                 let full = tile.len() == TILE * TILE;
-                let quarter = |q: usize, i: usize| (q / 2 * H + i / H) * TILE + q % 2 * H + i % H;
                 let quarters: [Option<[Vec3; 4]>; 4] = std::array::from_fn(|q| {
                     let on_one = |g| (0..H * H).all(|i| group(&tile[quarter(q, i)].1) == g);
                     (full && on_one(group(&tile[quarter(q, 0)].1)))
@@ -222,31 +252,31 @@ impl Renderer<'_> {
                         continue;
                     }
                     let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    let (faces_l, lit_l) = (facing[l], &mut lit_by[l]);
                     let ratios = &ratios[l * LANES..][..tile.len()];
                     // The tile test reads one level: the finest its points need (each point then
                     // gets texels at least as fine as its own level's; where that level's pages
                     // do not cover the tile, the test cannot tell).
                     let hull_of =
                         |k: &[Vec3; 4], first: usize, finest: u8| c.hull(k, tile[first].1.tri, finest);
-                    let decide_all = |hull: Hull,
-                                      points: &mut dyn Iterator<Item = usize>,
-                                      lit: &mut [u8],
-                                      counts: &mut MapCounts| {
-                        let lit_all = hull == Hull::Lit;
-                        for k in points {
-                            let j = tile[k].0;
-                            if faces[j * stride + byte] & bit != 0 {
-                                lit[j * stride + byte] |= if lit_all { bit } else { 0 };
-                                counts.decided(lit_all);
-                                counts.by_tile += 1;
-                            }
+                    // The points of `points` (a bit each) that the light faces, decided as the
+                    // tile test decided them.
+                    let decide_all = |hull: Hull, points: u64, lit: &mut u64, counts: &mut MapCounts| {
+                        let decided = points & faces_l;
+                        let n = u64::from(decided.count_ones());
+                        if hull == Hull::Lit {
+                            *lit |= decided;
+                            counts.lit += n;
+                        } else {
+                            counts.shadowed += n;
                         }
+                        counts.by_tile += n;
                     };
                     let hull = corners.as_ref().map_or(Hull::Unknown, |k| {
                         hull_of(k, 0, level(l, ratios.iter().copied().fold(0.0, f32::max)))
                     });
                     if hull != Hull::Unknown {
-                        decide_all(hull, &mut (0..tile.len()), lit, &mut counts[l]);
+                        decide_all(hull, u64::MAX, lit_l, &mut counts[l]);
                         continue;
                     }
                     // The points no quarter's test decided, a bit per point of the tile.
@@ -256,25 +286,24 @@ impl Renderer<'_> {
                         let finest = level(l, (0..H * H).map(|i| ratios[quarter(q, i)]).fold(0.0, f32::max));
                         let hull = hull_of(k, quarter(q, 0), finest);
                         if hull != Hull::Unknown {
-                            decide_all(hull, &mut (0..H * H).map(|i| quarter(q, i)), lit, &mut counts[l]);
-                            (0..H * H).for_each(|i| undecided &= !(1u64 << quarter(q, i)));
+                            decide_all(hull, QUARTERS[q], lit_l, &mut counts[l]);
+                            undecided &= !QUARTERS[q];
                         }
                     }
                     // Located first, then decided: two loops measured faster than one.
                     located.clear();
-                    for (k, (j, s)) in tile.iter().enumerate() {
-                        if faces[j * stride + byte] & bit != 0 && undecided >> k & 1 != 0 {
-                            located.push((k, c.locate_at(s.p, level(l, ratios[k]))));
-                        }
+                    let mut left = faces_l & undecided;
+                    while left != 0 {
+                        let k = left.trailing_zeros() as usize;
+                        located.push((k, c.locate_at(tile[k].1.p, level(l, ratios[k]))));
+                        left &= left - 1;
                     }
                     for &(k, m) in &located {
                         let (j, s) = &tile[k];
                         let lk = c.classify_at(s.p, s.tri, m);
                         let settled = settle(self, &lk, s, lights[l].position);
                         let is_lit = settled.unwrap_or(lk.decision == Decision::Lit);
-                        if is_lit {
-                            lit[j * stride + byte] |= bit;
-                        }
+                        *lit_l |= u64::from(is_lit) << k;
                         counts[l].decided(is_lit);
                         counts[l].by_suspects += u64::from(settled.is_some());
                         if lk.map_border && settled.is_none() {
@@ -284,10 +313,26 @@ impl Renderer<'_> {
                         }
                     }
                 }
+                // The tile's bits into the per-pixel buffers.
+                for (l, (&f, &lb)) in facing.iter().zip(&lit_by).enumerate() {
+                    let (byte, bit) = (l / 8, 1u8 << (l % 8));
+                    for (bits, buf) in [(f, &mut *faces), (lb, &mut *lit)] {
+                        let mut bits = bits;
+                        while bits != 0 {
+                            buf[tile[bits.trailing_zeros() as usize].0 * stride + byte] |= bit;
+                            bits &= bits - 1;
+                        }
+                    }
+                }
+                // The direct light of the lights that light each point, with the geometry they
+                // were decided with (a light lights only the points it faces, where
+                // `lights_along` gave it).
                 for (k, (j, s)) in tile.iter().enumerate() {
-                    let lb = &lit[j * stride..][..stride];
-                    let g = &geo[k * nl..][..nl];
-                    out[*j] = reflect(self, s, |l, _| if bit(lb, l) { g[l] } else { None });
+                    let along = |l: usize| {
+                        let f = &froms[l];
+                        (lit_by[l] >> k & 1 != 0).then(|| (f.wi(k), f.cos[k], f.d2[k]))
+                    };
+                    out[*j] = reflect(self, s, |l, _| along(l));
                 }
                 // Kept for the border rays, which would make the points again.
                 while keep_points && bordered != 0 {

@@ -204,7 +204,12 @@ impl Renderer<'_> {
                     // `light_geometry_and_terms`, on its arithmetic done a lane a point: where
                     // it gives the light's geometry.
                     let mut shines = 0u64;
-                    if !is_dark(light) {
+                    if light.spot.is_none() && !is_dark(light) {
+                        // `lights_along` without a cone: the shading normal's cosine alone.
+                        for k in 0..tile.len() {
+                            shines |= u64::from((from.d2[k] != 0.0) & (from.cos[k] > 0.0)) << k;
+                        }
+                    } else if !is_dark(light) {
                         for k in 0..tile.len() {
                             let g = from.d2[k] != 0.0
                                 && lights_along(light, from.wi(k), from.cos[k], from.d2[k]).is_some();

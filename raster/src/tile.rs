@@ -24,8 +24,9 @@ use crate::zbuf::{Isa, Tier};
 use glam::Vec4;
 
 /// Input triangles per parallel setup task: large enough to amortise task overhead, small enough
-/// to balance a few hundred thousand triangles over the cores.
-const SETUP_CHUNK: usize = 2048;
+/// that the few tens of thousands of triangles a frame's culling leaves (a dozen tasks at twice
+/// this size) balance over the cores.
+const SETUP_CHUNK: usize = 1024;
 
 /// Rounds a requested tile size up to a multiple of the block size, within `[BLOCK, 4096]`.
 pub(crate) fn effective_tile_size(requested: u32) -> u32 {

@@ -308,6 +308,11 @@ fn ratio(a: f64, b: f64) -> String {
     if b > 0.0 { format!("{:.2}x", a / b) } else { "-".into() }
 }
 
+/// `part` of `whole`, in per cent with one decimal.
+fn percent(part: u64, whole: u64) -> String {
+    if whole > 0 { format!("{:.1} %", 100.0 * part as f64 / whole as f64) } else { "-".into() }
+}
+
 /// The Markdown report: the tables with the thesis's figures beside ours.
 fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
     let mut s = String::new();
@@ -470,7 +475,8 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
         s,
         "\n### Cost per unit: CPU ns per map decision, border ray, shadow ray and mirror ray\n\n\
          A pass's median time times the threads, divided by what it counted in a frame: the map \
-         decisions of SMeRTS's classify pass ((camera hit, light) pairs, with their direct light), \
+         decisions of SMeRTS's classify pass ((camera hit, light) pairs, with their direct light; \
+         the share decided a tile at a time by the tile test, the rest point by point), \
          its border rays (`shadow_rays`: the camera hits' pairs a ray decides, hint first, those \
          pixels shaded again; the shadow rays of mirror hits belong to `specular`), the reference's \
          shadow rays (its `direct` pass, shading included; rasterized visibility), and the mirror \
@@ -485,6 +491,7 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             "scene",
             "map decisions",
             "ns per decision",
+            "decided by tile",
             "border rays",
             "ns per border ray",
             "reference shadow rays",
@@ -502,6 +509,7 @@ fn tables(results: &[SceneResult], a: &BenchArgs, command: &str) -> String {
             r.scene.clone(),
             n(c.map_decisions),
             format!("{:.1}", per_unit(pass_ms(c, "classify"), c.map_decisions)),
+            percent(c.map_decisions_by_tile, c.map_decisions),
             n(c.border_rays),
             format!("{:.0}", per_unit(pass_ms(c, "shadow_rays"), c.border_rays)),
             n(b.rays.shadow),

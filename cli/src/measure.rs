@@ -64,6 +64,9 @@ pub struct Measurement {
     /// Map-based shadows: the (camera hit, light) pairs the classify pass decides per frame
     /// (lit, shadowed, or left to a ray; `LightStats`), summed over the lights.
     pub map_decisions: u64,
+    /// Of those, the pairs decided with the rest of their tile at once (`LightStats::by_tile`):
+    /// the rest were decided point by point, at several times the cost.
+    pub map_decisions_by_tile: u64,
     /// Map-based shadows: the (camera hit, light) pairs a shadow ray decided per frame (the
     /// border rays of the `shadow_rays` pass; `LightStats::undecided`), summed over the lights.
     /// The shadow rays of mirror hits are the specular pass's.
@@ -122,6 +125,10 @@ fn map_decisions(frame: &Frame) -> u64 {
     frame.stats.lights.iter().map(|l| l.lit + l.shadowed + l.undecided).sum()
 }
 
+fn map_decisions_by_tile(frame: &Frame) -> u64 {
+    frame.stats.lights.iter().map(|l| l.by_tile).sum()
+}
+
 /// Measures `configs` on `scene`, their timed frames alternated, and compares each film with
 /// `reference` (a film of the same size) when given. `progress` is called after every frame
 /// with the configuration's label.
@@ -165,6 +172,7 @@ pub fn measure(
             light_map_bytes: light_map_bytes(&f),
             vpl_pairs: f.stats.vpl_pairs,
             map_decisions: map_decisions(&f),
+            map_decisions_by_tile: map_decisions_by_tile(&f),
             border_rays: border_rays(&f),
             psnr_db: None,
             wrong_pairs: None,
@@ -190,6 +198,7 @@ pub fn measure(
             out[i].rays = f.stats.rays;
             out[i].light_map_bytes = light_map_bytes(&f);
             out[i].map_decisions = map_decisions(&f);
+            out[i].map_decisions_by_tile = map_decisions_by_tile(&f);
             out[i].border_rays = border_rays(&f);
             out[i].film = f.film;
         }

@@ -527,14 +527,18 @@ fn bench_writes_the_thesis_tables() {
     let ns =
         c["pass_ms"]["classify"].as_f64().unwrap() * 1e6 * v["threads"].as_f64().unwrap() / decisions as f64;
     assert_eq!(unit[2].trim(), format!("{ns:.1}"));
+    // Of those, the share the tile test decided.
+    let by_tile = c["map_decisions_by_tile"].as_u64().unwrap();
+    assert!(by_tile > 0 && by_tile < decisions, "{by_tile} of {decisions}");
+    assert_eq!(unit[3].trim(), format!("{:.1} %", 100.0 * by_tile as f64 / decisions as f64));
     // Border rays: the camera hits' pairs a ray decided (not the mirror hits' rays), over the
     // shadow-ray pass.
     let border = c["border_rays"].as_u64().unwrap();
     assert!(border > 0 && border <= c["rays"]["shadow"].as_u64().unwrap(), "{border}");
-    assert_eq!(unit[3].trim().replace(',', ""), border.to_string());
+    assert_eq!(unit[4].trim().replace(',', ""), border.to_string());
     let ns =
         c["pass_ms"]["shadow_rays"].as_f64().unwrap() * 1e6 * v["threads"].as_f64().unwrap() / border as f64;
-    assert_eq!(unit[4].trim(), format!("{ns:.0}"));
+    assert_eq!(unit[5].trim(), format!("{ns:.0}"));
 
     let (ok, _, err) = common::hyrt(&["bench", "missing-scene.toml", "--out", out]);
     assert!(!ok && err.contains("missing-scene.toml"), "{err}");

@@ -14,7 +14,7 @@ use super::lookup::{classifiers, settle};
 use super::map_cache::FrameMaps;
 use super::{BorderHint, LightStats, MapCounts, RayCounted, Shadowing, sum_per_light};
 use crate::render::gather::ShadePoint;
-use crate::render::light::{PlaneSides, is_dark, lights_along, on_viewer_side, reflect, seen_winding};
+use crate::render::light::{PlaneSides, on_viewer_side, reflect, seen_winding};
 use crate::render::{FrameStats, Progress, Renderer, Shadows, SurfaceHit};
 
 /// One band of rows of classify's outputs: the direct light, and the face, lit and edge bits.
@@ -201,22 +201,7 @@ impl Renderer<'_> {
                     }
                     let from = &mut froms[l];
                     lanes.seen_from(light.position, from);
-                    // `light_geometry_and_terms`, on its arithmetic done a lane a point: where
-                    // it gives the light's geometry.
-                    let mut shines = 0u64;
-                    if light.spot.is_none() && !is_dark(light) {
-                        // `lights_along` without a cone: the shading normal's cosine alone.
-                        for k in 0..tile.len() {
-                            shines |= u64::from((from.d2[k] != 0.0) & (from.cos[k] > 0.0)) << k;
-                        }
-                    } else if !is_dark(light) {
-                        for k in 0..tile.len() {
-                            let g = from.d2[k] != 0.0
-                                && lights_along(light, from.wi(k), from.cos[k], from.d2[k]).is_some();
-                            shines |= u64::from(g) << k;
-                        }
-                    }
-                    facing[l] = shines & side[l];
+                    facing[l] = from.shone_on(light, tile.len()) & side[l];
                     // (A loop of the lanes' arithmetic, one guide for all the points.)
                     let ratios = &mut ratios[l * LANES..][..tile.len()];
                     match resolution.get(l) {

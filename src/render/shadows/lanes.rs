@@ -12,6 +12,8 @@ use glam::Vec3;
 use hyrt_simd::{Isa, Tier};
 
 use crate::render::SurfaceHit;
+use crate::render::light::{is_dark, lights_along};
+use crate::scene::PointLight;
 
 /// The most points of a tile.
 pub(super) const LANES: usize = 64;
@@ -121,6 +123,31 @@ impl FromLight {
             wi: [[0.0; LANES]; 3],
             cos: [0.0; LANES],
         }
+    }
+
+    /// The first `n` lanes (at most [`LANES`]) that `light`, as seen from them by
+    /// [`TileLanes::seen_from`], shines on: where `light_geometry_and_terms` gives its geometry
+    /// (not dark, not at the point, [`lights_along`]), a bit each (bit `k` for lane `k`).
+    pub(super) fn shone_on(&self, light: &PointLight, n: usize) -> u64 {
+        let n = n.min(LANES);
+        let mut bits = 0u64;
+        if is_dark(light) {
+            return bits;
+        }
+        if light.spot.is_none() {
+            // `lights_along` without a cone: the shading normal's cosine alone, a compare per
+            // lane the compiler vectorises.
+            for k in 0..n {
+                bits |= u64::from((self.d2[k] != 0.0) & (self.cos[k] > 0.0)) << k;
+            }
+        } else {
+            for k in 0..n {
+                let g =
+                    self.d2[k] != 0.0 && lights_along(light, self.wi(k), self.cos[k], self.d2[k]).is_some();
+                bits |= u64::from(g) << k;
+            }
+        }
+        bits
     }
 
     /// Lane `k`'s direction to the light.

@@ -5,7 +5,8 @@
 //! frames of the hybrid at 640x480, after a first frame that builds the maps). `HYRT_MAP_RES`
 //! overrides the light maps' resolution; `HYRT_VPLS=N` adds indirect light from `N` VPL paths
 //! by maps (`HYRT_VPL_RAYS=1`: by rays), `HYRT_VPL_RES` and `HYRT_INTERLEAVE` set its knobs;
-//! `HYRT_NO_TEXTURES=1` drops the materials' textures.
+//! `HYRT_NO_TEXTURES=1` drops the materials' textures; `HYRT_SIZE=WxH` sets the image size (a
+//! small frame for `valgrind --tool=cachegrind`). The last line is a frame's map decisions.
 
 use std::collections::BTreeMap;
 
@@ -24,7 +25,10 @@ fn main() {
             std::process::exit(1);
         }
     };
-    (scene.settings.width, scene.settings.height) = (640, 480);
+    (scene.settings.width, scene.settings.height) = std::env::var("HYRT_SIZE")
+        .ok()
+        .and_then(|v| v.split_once('x').and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?))))
+        .unwrap_or((640, 480));
     if std::env::var_os("HYRT_NO_TEXTURES").is_some() {
         scene.materials.iter_mut().for_each(|m| m.texture = None);
     }
@@ -52,7 +56,9 @@ fn main() {
         opts.indirect_opts.interleave = k;
     }
     let r = Renderer::new(&scene, opts);
-    r.render(&|| {});
+    let first = r.render(&|| {}).stats;
+    // Map decisions of a frame (each frame of the loop makes the same), to divide a profile by.
+    let decisions: u64 = first.lights.iter().map(|l| l.lit + l.shadowed + l.undecided).sum();
     let mut times: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     for _ in 0..frames {
         let stats = r.render(&|| {}).stats;
@@ -67,4 +73,5 @@ fn main() {
         v.sort_by(f64::total_cmp);
         println!("{k:>14} {:8.2}", v[v.len() / 2]);
     }
+    println!("{:>14} {decisions:8}", "decisions");
 }
